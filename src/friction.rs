@@ -1,0 +1,1 @@
+//! Friction laws (placeholder, being written).
