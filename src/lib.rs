@@ -1,5 +1,23 @@
 //! stickslip — plane-strain finite elements for frictional contact of two half-cylinders
 //! with a slip-weakening friction coefficient (Papangelo, Ciavarella & Barber).
+//!
+//! Pipeline: [`mesh`] (gmsh reader and checks) → [`dofs`] → [`assembly`] of [`elasticity`]
+//! on [`shapes::tri6`] → [`linsolve`] (faer Cholesky) → [`condense`] onto retained DOFs →
+//! [`run`] (load stages) → [`output`] (VTK, CSV, JSON). Closed forms live in [`analytic`].
 
+#[cfg(not(feature = "wip"))]
 pub mod analytic;
+pub mod assembly;
+pub mod case;
+pub mod condense;
+pub mod dofs;
+pub mod elasticity;
 pub mod friction;
+pub mod linsolve;
+pub mod loads;
+pub mod mesh;
+pub mod model;
+pub mod output;
+pub mod quadrature;
+pub mod run;
+pub mod shapes;

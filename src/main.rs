@@ -1,3 +1,84 @@
-fn main() {
-    println!("Hello, world!");
+//! `stickslip` command line.
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "stickslip", version, about = "Plane-strain FE for frictional contact of two half-cylinders with slip-weakening friction")]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Run a case file and write VTK, CSV and JSON output.
+    Run {
+        /// The case file (JSON).
+        case: PathBuf,
+        /// Output directory (default: the case's `output.dir`, else `out/<case name>`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Number of threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Print nothing but errors.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Print counts, groups, element sizes and quality figures of a gmsh mesh (JSON).
+    MeshInfo {
+        /// The mesh file (gmsh MSH 4.1).
+        mesh: PathBuf,
+    },
+}
+
+fn set_threads(n: Option<usize>) -> Result<(), String> {
+    let n = n.unwrap_or(0);
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build_global()
+        .map_err(|e| format!("cannot set up {n} threads: {e}"))?;
+    faer::set_global_parallelism(if rayon::current_num_threads() <= 1 {
+        faer::Par::Seq
+    } else {
+        faer::Par::rayon(rayon::current_num_threads())
+    });
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.cmd {
+        Cmd::Run { case, out, threads, quiet } => {
+            if threads == Some(0) {
+                eprintln!("error: --threads must be at least 1");
+                return ExitCode::from(2);
+            }
+            if let Err(e) = set_threads(threads) {
+                eprintln!("error: {e}");
+                return ExitCode::from(2);
+            }
+            let opts = stickslip::run::RunOptions { out, quiet };
+            match stickslip::run::run(&case, &opts) {
+                Ok(_) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(e.exit_code() as u8)
+                }
+            }
+        }
+        Cmd::MeshInfo { mesh } => match stickslip::mesh::gmsh::read(&mesh) {
+            Ok(m) => {
+                let info = stickslip::mesh::info::info(&m);
+                println!("{}", serde_json::to_string_pretty(&info).expect("serialisable"));
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
+    }
 }

@@ -1,0 +1,32 @@
+// Small unstructured second-order mesh of the unit square for the patch test
+// (the mid-edge nodes are perturbed in code by the test itself).
+Geometry.AutoCoherence = 0;
+DefineConstant[ h = {0.34, Name "h"} ];
+Point(1) = {0, 0, 0};
+Point(2) = {1, 0, 0};
+Point(3) = {1, 1, 0};
+Point(4) = {0, 1, 0};
+Line(1) = {1, 2};   // bottom
+Line(2) = {2, 3};   // right
+Line(3) = {3, 4};   // top
+Line(4) = {4, 1};   // left
+Curve Loop(1) = {1, 2, 3, 4};
+Plane Surface(1) = {1};
+Physical Surface("body", 1) = {1};
+Physical Curve("left", 2)   = {4};
+Physical Curve("right", 3)  = {2};
+Physical Curve("bottom", 4) = {1};
+Physical Curve("top", 5)    = {3};
+Mesh.MeshSizeFromPoints = 0;
+Mesh.MeshSizeFromCurvature = 0;
+Mesh.MeshSizeMin = h;
+Mesh.MeshSizeMax = h;
+Mesh.Algorithm = 6;
+Mesh.RandomSeed = 1;
+General.NumThreads = 1;
+Mesh.ElementOrder = 2;
+Mesh.SecondOrderLinear = 1;
+Mesh.HighOrderOptimize = 0;
+Mesh.MshFileVersion = 4.1;
+Mesh.Binary = 0;
+Mesh.SaveAll = 0;

@@ -1,0 +1,303 @@
+//! The case file: a JSON document that names the mesh, the bodies and their materials, the
+//! supports, the rigid pilot, the loads, the load stages and the output.
+//!
+//! Parsing rejects unknown keys (serde names the key, line and column); [`Case::validate`]
+//! then checks every value against its allowed range, naming the key, before anything is
+//! allocated.
+
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// A whole case.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Case {
+    /// Optional free text.
+    #[serde(default)]
+    pub title: String,
+    /// Mesh file, relative to the case file.
+    pub mesh: PathBuf,
+    /// The bodies to model (surface groups) with their materials. Other surfaces of the mesh
+    /// are left out.
+    pub bodies: Vec<Body>,
+    /// Prescribed displacements on curve groups (constant over the run).
+    #[serde(default)]
+    pub supports: Vec<Support>,
+    /// The rigid pilot: a curve group whose nodes translate together without rotating.
+    #[serde(default)]
+    pub pilot: Option<Pilot>,
+    /// Distributed loads on curve groups, scaled by each stage's `traction_scale`.
+    #[serde(default)]
+    pub tractions: Vec<TractionSpec>,
+    /// Load stages, applied in order; each ramps linearly from the end of the previous one.
+    pub stages: Vec<Stage>,
+    /// What to write.
+    #[serde(default)]
+    pub output: Output,
+}
+
+/// A body and its material.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Body {
+    /// Name of the surface physical group.
+    pub group: String,
+    /// Young's modulus E (> 0).
+    #[serde(rename = "E")]
+    pub e: f64,
+    /// Poisson's ratio ν (−1 < ν < 0.5).
+    pub nu: f64,
+}
+
+/// Prescribed displacement components on a curve group.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Support {
+    pub group: String,
+    /// Prescribed x displacement; absent = free.
+    #[serde(default)]
+    pub ux: Option<f64>,
+    /// Prescribed y displacement; absent = free.
+    #[serde(default)]
+    pub uy: Option<f64>,
+}
+
+/// The rigid pilot face.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Pilot {
+    pub group: String,
+}
+
+/// How one pilot component is driven at the end of a stage.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+pub enum Control {
+    /// Total force on the pilot in this direction (per unit thickness).
+    Force(f64),
+    /// Pilot displacement in this direction.
+    Displacement(f64),
+}
+
+/// A distributed load on a curve group.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TractionSpec {
+    pub group: String,
+    /// `uniform` (with `tx`, `ty`), `pressure` (with `p`) or `hertz` (with `p0`, `a`, `x0`).
+    pub kind: TractionKind,
+    #[serde(default)]
+    pub tx: Option<f64>,
+    #[serde(default)]
+    pub ty: Option<f64>,
+    #[serde(default)]
+    pub p: Option<f64>,
+    #[serde(default)]
+    pub p0: Option<f64>,
+    #[serde(default)]
+    pub a: Option<f64>,
+    #[serde(default)]
+    pub x0: Option<f64>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(rename_all = "snake_case")]
+pub enum TractionKind {
+    Uniform,
+    Pressure,
+    Hertz,
+}
+
+/// A load stage.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Stage {
+    #[serde(default)]
+    pub name: String,
+    /// Number of load steps (≥ 1).
+    pub steps: usize,
+    /// Pilot control at the end of the stage, per component; absent = as at the end of the
+    /// previous stage (force 0 at the start).
+    #[serde(default)]
+    pub pilot_x: Option<Control>,
+    #[serde(default)]
+    pub pilot_y: Option<Control>,
+    /// Multiplier of the `tractions` at the end of the stage; absent = as before (0 at the start).
+    #[serde(default)]
+    pub traction_scale: Option<f64>,
+}
+
+/// Output settings.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    /// Output directory, relative to the current directory; default `out/<case name>`.
+    #[serde(default)]
+    pub dir: Option<PathBuf>,
+    /// Write `.vtu` files and the `.pvd` series.
+    #[serde(default = "yes")]
+    pub vtu: bool,
+    /// Write every n-th step (the last step is always written).
+    #[serde(default = "one")]
+    pub every: usize,
+}
+
+fn yes() -> bool {
+    true
+}
+fn one() -> usize {
+    1
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Output {
+            dir: None,
+            vtu: true,
+            every: 1,
+        }
+    }
+}
+
+/// A case that cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum CaseError {
+    #[error("{path}: cannot read the case file: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("{path}: {detail}")]
+    Syntax { path: String, detail: String },
+    #[error("{path}: `{key}` = {value}: {why}")]
+    Value {
+        path: String,
+        key: String,
+        value: String,
+        why: String,
+    },
+}
+
+impl Case {
+    /// Reads, parses and validates a case file.
+    pub fn load(path: &Path) -> Result<Case, CaseError> {
+        let p = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| CaseError::Io { path: p.clone(), source })?;
+        let case: Case = serde_json::from_str(&text).map_err(|e| CaseError::Syntax {
+            path: p.clone(),
+            detail: e.to_string(),
+        })?;
+        case.validate(&p)?;
+        Ok(case)
+    }
+
+    /// The mesh path resolved against the directory of the case file.
+    pub fn mesh_path(&self, case_path: &Path) -> PathBuf {
+        case_path.parent().unwrap_or(Path::new(".")).join(&self.mesh)
+    }
+
+    /// Checks every value against its allowed range; the error names the key.
+    pub fn validate(&self, path: &str) -> Result<(), CaseError> {
+        let bad = |key: String, value: String, why: &str| CaseError::Value {
+            path: path.into(),
+            key,
+            value,
+            why: why.into(),
+        };
+        let finite = |key: String, v: f64| -> Result<(), CaseError> {
+            if v.is_finite() { Ok(()) } else { Err(bad(key, format!("{v}"), "must be a finite number")) }
+        };
+        if self.bodies.is_empty() {
+            return Err(bad("bodies".into(), "[]".into(), "at least one body is needed"));
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            if !(b.e > 0.0 && b.e.is_finite()) {
+                return Err(bad(format!("bodies[{i}].E"), format!("{}", b.e), "must be > 0 and finite"));
+            }
+            if !(b.nu > -1.0 && b.nu < 0.5) {
+                return Err(bad(format!("bodies[{i}].nu"), format!("{}", b.nu), "must satisfy −1 < ν < 0.5"));
+            }
+            if self.bodies[..i].iter().any(|o| o.group == b.group) {
+                return Err(bad(format!("bodies[{i}].group"), b.group.clone(), "body listed twice"));
+            }
+        }
+        for (i, s) in self.supports.iter().enumerate() {
+            if s.ux.is_none() && s.uy.is_none() {
+                return Err(bad(format!("supports[{i}]"), s.group.clone(), "give `ux`, `uy` or both"));
+            }
+            for (k, v) in [("ux", s.ux), ("uy", s.uy)] {
+                if let Some(v) = v {
+                    finite(format!("supports[{i}].{k}"), v)?;
+                }
+            }
+        }
+        for (i, t) in self.tractions.iter().enumerate() {
+            let need = |k: &str, v: Option<f64>| -> Result<f64, CaseError> {
+                let v = v.ok_or_else(|| bad(format!("tractions[{i}].{k}"), "missing".into(), "required for this kind"))?;
+                finite(format!("tractions[{i}].{k}"), v)?;
+                Ok(v)
+            };
+            let forbid = |k: &str, v: Option<f64>| -> Result<(), CaseError> {
+                match v {
+                    Some(x) => Err(bad(format!("tractions[{i}].{k}"), format!("{x}"), "not used by this kind")),
+                    None => Ok(()),
+                }
+            };
+            match t.kind {
+                TractionKind::Uniform => {
+                    need("tx", t.tx.or(Some(0.0)))?;
+                    need("ty", t.ty.or(Some(0.0)))?;
+                    for (k, v) in [("p", t.p), ("p0", t.p0), ("a", t.a), ("x0", t.x0)] {
+                        forbid(k, v)?;
+                    }
+                }
+                TractionKind::Pressure => {
+                    need("p", t.p)?;
+                    for (k, v) in [("tx", t.tx), ("ty", t.ty), ("p0", t.p0), ("a", t.a), ("x0", t.x0)] {
+                        forbid(k, v)?;
+                    }
+                }
+                TractionKind::Hertz => {
+                    need("p0", t.p0)?;
+                    let a = need("a", t.a)?;
+                    if a <= 0.0 {
+                        return Err(bad(format!("tractions[{i}].a"), format!("{a}"), "must be > 0"));
+                    }
+                    need("x0", t.x0.or(Some(0.0)))?;
+                    for (k, v) in [("tx", t.tx), ("ty", t.ty), ("p", t.p)] {
+                        forbid(k, v)?;
+                    }
+                }
+            }
+        }
+        if self.stages.is_empty() {
+            return Err(bad("stages".into(), "[]".into(), "at least one stage is needed"));
+        }
+        for (i, s) in self.stages.iter().enumerate() {
+            if s.steps == 0 || s.steps > 100_000 {
+                return Err(bad(format!("stages[{i}].steps"), format!("{}", s.steps), "must be between 1 and 100000"));
+            }
+            for (k, c) in [("pilot_x", s.pilot_x), ("pilot_y", s.pilot_y)] {
+                if let Some(c) = c {
+                    if self.pilot.is_none() {
+                        return Err(bad(format!("stages[{i}].{k}"), format!("{c:?}"), "there is no `pilot` in this case"));
+                    }
+                    let (Control::Force(v) | Control::Displacement(v)) = c;
+                    finite(format!("stages[{i}].{k}"), v)?;
+                }
+            }
+            if let Some(v) = s.traction_scale {
+                finite(format!("stages[{i}].traction_scale"), v)?;
+            }
+        }
+        if self.output.every == 0 {
+            return Err(bad("output.every".into(), "0".into(), "must be ≥ 1"));
+        }
+        Ok(())
+    }
+
+    /// Total number of load steps.
+    pub fn total_steps(&self) -> usize {
+        self.stages.iter().map(|s| s.steps).sum()
+    }
+}

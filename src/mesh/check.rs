@@ -1,0 +1,195 @@
+//! Checks run on a mesh before anything is assembled; each failure names the element, node or
+//! group so that the user can find it in gmsh.
+
+use super::{GroupDim, Mesh};
+use crate::quadrature::TRI_6;
+use crate::shapes::tri6;
+
+/// A mesh that cannot be used, with what is wrong and where.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum MeshCheckError {
+    #[error("{path}: physical group `{name}` is not in the mesh (its groups: {available})")]
+    MissingGroup {
+        path: String,
+        name: String,
+        available: String,
+    },
+    #[error("{path}: physical group `{name}` is empty")]
+    EmptyGroup { path: String, name: String },
+    #[error("{path}: physical group `{name}` is a {found}, but a {expected} is needed here")]
+    WrongDim {
+        path: String,
+        name: String,
+        found: &'static str,
+        expected: &'static str,
+    },
+    #[error("{path}: element {tag} is degenerate (its vertices are collinear or coincide)")]
+    Degenerate { path: String, tag: u64 },
+    #[error(
+        "{path}: element {tag} is curved so much that its Jacobian is not positive at every \
+         quadrature point (min det J = {min_det:.3e}); move its mid-edge nodes or refine there"
+    )]
+    BadJacobian { path: String, tag: u64, min_det: f64 },
+    #[error(
+        "{path}: bodies `{a}` and `{b}` share node {node} (and {more} more); each body must be \
+         meshed on its own so that contact can separate them"
+    )]
+    SharedNodes {
+        path: String,
+        a: String,
+        b: String,
+        node: u64,
+        more: usize,
+    },
+    #[error("{path}: boundary element {tag} in group `{group}` has zero length")]
+    ZeroLengthEdge { path: String, tag: u64, group: String },
+    #[error("{path}: node {node} has a coordinate that is not a finite number")]
+    NonFiniteNode { path: String, node: u64 },
+    #[error(
+        "{path}: boundary element {tag} in group `{group}` is not an edge of any triangle of the \
+         bodies in use"
+    )]
+    DanglingEdge { path: String, tag: u64, group: String },
+}
+
+/// What the checks found that is not an error.
+#[derive(Debug, Clone, Default)]
+pub struct CheckReport {
+    /// Triangles that were clockwise in the file and were reoriented (gmsh tags).
+    pub reoriented: Vec<u64>,
+}
+
+fn path(mesh: &Mesh) -> String {
+    mesh.source.display().to_string()
+}
+
+/// Checks that a group exists, is not empty and has the expected dimension.
+pub fn require_group(mesh: &Mesh, name: &str, dim: GroupDim) -> Result<(), MeshCheckError> {
+    let g = mesh.group(name).ok_or_else(|| MeshCheckError::MissingGroup {
+        path: path(mesh),
+        name: name.into(),
+        available: mesh
+            .groups
+            .iter()
+            .map(|g| g.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
+    })?;
+    let label = |d: GroupDim| match d {
+        GroupDim::Curve => "curve",
+        GroupDim::Surface => "surface",
+    };
+    if g.dim != dim {
+        return Err(MeshCheckError::WrongDim {
+            path: path(mesh),
+            name: name.into(),
+            found: label(g.dim),
+            expected: label(dim),
+        });
+    }
+    if g.elements.is_empty() {
+        return Err(MeshCheckError::EmptyGroup {
+            path: path(mesh),
+            name: name.into(),
+        });
+    }
+    Ok(())
+}
+
+/// Checks the mesh for use with the given body (surface) groups and boundary (curve) groups.
+///
+/// * every named group exists, has the right dimension and is not empty;
+/// * node coordinates are finite;
+/// * no triangle of the bodies is degenerate, and the Jacobian of every (possibly curved)
+///   triangle is positive at the vertices, the mid-edge nodes and the 6 quadrature points;
+/// * no two bodies share a node;
+/// * every boundary line has non-zero length.
+pub fn check(mesh: &Mesh, bodies: &[&str], boundaries: &[&str]) -> Result<CheckReport, MeshCheckError> {
+    for b in bodies {
+        require_group(mesh, b, GroupDim::Surface)?;
+    }
+    for b in boundaries {
+        require_group(mesh, b, GroupDim::Curve)?;
+    }
+    for (i, x) in mesh.nodes.iter().enumerate() {
+        if !x[0].is_finite() || !x[1].is_finite() {
+            return Err(MeshCheckError::NonFiniteNode {
+                path: path(mesh),
+                node: mesh.node_tags[i],
+            });
+        }
+    }
+    // Element geometry.
+    let mut owner: Vec<u32> = vec![u32::MAX; mesh.nodes.len()];
+    for (bi, b) in bodies.iter().enumerate() {
+        let g = mesh.group(b).expect("checked above");
+        for &e in &g.elements {
+            let xe = mesh.tri_coords(e);
+            let tag = mesh.triangles[e].tag;
+            let scale = (0..3)
+                .map(|k| {
+                    let [a, c] = [xe[k], xe[(k + 1) % 3]];
+                    (a[0] - c[0]).hypot(a[1] - c[1])
+                })
+                .fold(0.0, f64::max);
+            let area = tri6::vertex_area(&xe);
+            if !(area > 1e-12 * scale * scale) {
+                return Err(MeshCheckError::Degenerate {
+                    path: path(mesh),
+                    tag,
+                });
+            }
+            let pts = TRI_6
+                .iter()
+                .map(|(p, _)| *p)
+                .chain(tri6::NODE_REF_COORDS.iter().copied());
+            let min_det = pts
+                .map(|p| tri6::map_point(&xe, p[0], p[1]).det_j)
+                .fold(f64::INFINITY, f64::min);
+            if !(min_det > 0.0) {
+                return Err(MeshCheckError::BadJacobian {
+                    path: path(mesh),
+                    tag,
+                    min_det,
+                });
+            }
+            for &n in &mesh.triangles[e].nodes {
+                let o = owner[n];
+                if o != u32::MAX && o as usize != bi {
+                    let shared = shared_nodes(mesh, bodies[o as usize], b);
+                    return Err(MeshCheckError::SharedNodes {
+                        path: path(mesh),
+                        a: bodies[o as usize].to_string(),
+                        b: b.to_string(),
+                        node: mesh.node_tags[shared[0]],
+                        more: shared.len() - 1,
+                    });
+                }
+                owner[n] = bi as u32;
+            }
+        }
+    }
+    for b in boundaries {
+        let g = mesh.group(b).expect("checked above");
+        for &l in &g.elements {
+            let xe = mesh.line_coords(l);
+            let len = (xe[0][0] - xe[1][0]).hypot(xe[0][1] - xe[1][1]);
+            if !(len > 0.0) {
+                return Err(MeshCheckError::ZeroLengthEdge {
+                    path: path(mesh),
+                    tag: mesh.lines[l].tag,
+                    group: b.to_string(),
+                });
+            }
+        }
+    }
+    Ok(CheckReport {
+        reoriented: mesh.reoriented.clone(),
+    })
+}
+
+fn shared_nodes(mesh: &Mesh, a: &str, b: &str) -> Vec<usize> {
+    let na = mesh.group_nodes(mesh.group(a).expect("exists"));
+    let nb = mesh.group_nodes(mesh.group(b).expect("exists"));
+    na.into_iter().filter(|n| nb.binary_search(n).is_ok()).collect()
+}

@@ -1,0 +1,398 @@
+//! Reading gmsh MSH 4.1 files (ASCII or binary) through `mshio`, plus the `$PhysicalNames`
+//! section, which `mshio` skips.
+//!
+//! Only 6-node triangles (type 9) and 3-node lines (type 8) are kept as elements; points
+//! (type 15) are ignored; any other type in a physical group is an error naming the element.
+
+use super::{Group, GroupDim, Lin3, Mesh, Tri6};
+use crate::shapes::tri6;
+use std::collections::HashMap;
+use std::path::Path;
+
+/// What can go wrong reading a mesh file.
+#[derive(Debug, thiserror::Error)]
+pub enum MeshReadError {
+    #[error("{path}: cannot read the file: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error(
+        "{path}: MSH format {version} is not supported; re-export it as MSH 4.1, e.g. \
+         `gmsh {path} -save -format msh41 -o new.msh`, or set `Mesh.MshFileVersion = 4.1;` in the .geo"
+    )]
+    OldFormat { path: String, version: String },
+    #[error("{path}: not a gmsh mesh file (no $MeshFormat header)")]
+    NotMsh { path: String },
+    #[error("{path}: cannot parse the mesh: {detail}")]
+    Parse { path: String, detail: String },
+    #[error("{path}: malformed $PhysicalNames section at line {line}: {detail}")]
+    PhysicalNames {
+        path: String,
+        line: usize,
+        detail: String,
+    },
+    #[error(
+        "{path}: element {tag} has gmsh type {kind} ({name}); only 6-node triangles (type 9) and \
+         3-node lines (type 8) are supported{hint}"
+    )]
+    UnsupportedElement {
+        path: String,
+        tag: u64,
+        kind: u8,
+        name: String,
+        hint: &'static str,
+    },
+    #[error("{path}: element {tag} refers to node {node}, which is not in the $Nodes section")]
+    MissingNode { path: String, tag: u64, node: u64 },
+    #[error("{path}: the file has no {what}")]
+    Empty { path: String, what: &'static str },
+}
+
+/// Reads and parses a mesh file. The result is not yet checked: call [`super::check::check`].
+pub fn read(path: &Path) -> Result<Mesh, MeshReadError> {
+    let p = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|source| MeshReadError::Io {
+        path: p.clone(),
+        source,
+    })?;
+    parse(&bytes, path)
+}
+
+/// Parses the bytes of a mesh file; `path` is used for messages only.
+pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
+    let p = path.display().to_string();
+    let version = header_version(bytes).ok_or_else(|| MeshReadError::NotMsh { path: p.clone() })?;
+    if !version.starts_with('4') {
+        return Err(MeshReadError::OldFormat { path: p, version });
+    }
+    if version != "4.1" {
+        return Err(MeshReadError::OldFormat { path: p, version });
+    }
+    let names = physical_names(bytes, &p)?;
+    let msh = mshio::parse_msh_bytes(bytes).map_err(|e| MeshReadError::Parse {
+        path: p.clone(),
+        detail: short_parse_error(&format!("{e}")),
+    })?;
+
+    // Nodes.
+    let node_sec = msh.data.nodes.as_ref().ok_or(MeshReadError::Empty {
+        path: p.clone(),
+        what: "$Nodes section",
+    })?;
+    let file_tags = node_tags_in_file_order(bytes, msh.header.file_type != 0, msh.header.size_t_size)
+        .ok_or_else(|| MeshReadError::Parse {
+            path: p.clone(),
+            detail: "cannot read the node tags of the $Nodes section".into(),
+        })?;
+    let mut nodes = Vec::new();
+    let mut node_tags = Vec::new();
+    let mut index_of: HashMap<u64, usize> = HashMap::new();
+    for block in &node_sec.node_blocks {
+        // mshio keeps the tags only when the whole section's tags are sparse; otherwise they
+        // come from our own pass over the section (`file_tags`), in file order.
+        let tags: Vec<u64> = match &block.node_tags {
+            Some(map) => {
+                let mut v = vec![0u64; block.nodes.len()];
+                for (&tag, &i) in map {
+                    v[i] = tag;
+                }
+                v
+            }
+            None => {
+                let start = nodes.len();
+                file_tags
+                    .get(start..start + block.nodes.len())
+                    .ok_or_else(|| MeshReadError::Parse {
+                        path: p.clone(),
+                        detail: "node tags of the $Nodes section do not match its blocks".into(),
+                    })?
+                    .to_vec()
+            }
+        };
+        for (node, tag) in block.nodes.iter().zip(tags) {
+            index_of.insert(tag, nodes.len());
+            nodes.push([node.x, node.y]);
+            node_tags.push(tag);
+        }
+    }
+    if nodes.is_empty() {
+        return Err(MeshReadError::Empty {
+            path: p,
+            what: "nodes",
+        });
+    }
+
+    // Entity → physical tags.
+    let mut entity_phys: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
+    if let Some(ent) = &msh.data.entities {
+        for c in &ent.curves {
+            entity_phys.insert((1, c.tag), c.physical_tags.clone());
+        }
+        for s in &ent.surfaces {
+            entity_phys.insert((2, s.tag), s.physical_tags.clone());
+        }
+    }
+
+    let mut mesh = Mesh {
+        source: path.to_path_buf(),
+        nodes,
+        node_tags,
+        ..Default::default()
+    };
+    let mut group_index: HashMap<(i32, i32), usize> = HashMap::new();
+    let elements = msh.data.elements.as_ref().ok_or(MeshReadError::Empty {
+        path: p.clone(),
+        what: "$Elements section",
+    })?;
+    for block in &elements.element_blocks {
+        let kind = block.element_type as u8;
+        let dim = block.entity_dim;
+        if kind == 15 || dim == 0 {
+            continue; // points carry no stiffness or load
+        }
+        let phys = entity_phys
+            .get(&(dim, block.entity_tag))
+            .cloned()
+            .unwrap_or_default();
+        if kind != 9 && kind != 8 {
+            let tag = block.elements.first().map_or(0, |e| e.element_tag);
+            let hint = match kind {
+                2 | 1 => {
+                    "; this is a first-order mesh: set `Mesh.ElementOrder = 2;` (and \
+                     `Mesh.SecondOrderLinear = 0;` for curved edges) and mesh again"
+                }
+                _ => "",
+            };
+            return Err(MeshReadError::UnsupportedElement {
+                path: p,
+                tag,
+                kind,
+                name: format!("{:?}", block.element_type),
+                hint,
+            });
+        }
+        let mut local = Vec::with_capacity(block.elements.len());
+        for el in &block.elements {
+            let idx = |t: u64| {
+                index_of
+                    .get(&t)
+                    .copied()
+                    .ok_or(MeshReadError::MissingNode {
+                        path: p.clone(),
+                        tag: el.element_tag,
+                        node: t,
+                    })
+            };
+            if kind == 9 {
+                if el.nodes.len() != 6 {
+                    return Err(MeshReadError::Parse {
+                        path: p,
+                        detail: format!("element {} has {} nodes, 6 expected", el.element_tag, el.nodes.len()),
+                    });
+                }
+                let mut n = [0usize; 6];
+                for k in 0..6 {
+                    n[k] = idx(el.nodes[k])?;
+                }
+                local.push(mesh.triangles.len());
+                mesh.triangles.push(Tri6 {
+                    nodes: n,
+                    tag: el.element_tag,
+                });
+            } else {
+                if el.nodes.len() != 3 {
+                    return Err(MeshReadError::Parse {
+                        path: p,
+                        detail: format!("element {} has {} nodes, 3 expected", el.element_tag, el.nodes.len()),
+                    });
+                }
+                let mut n = [0usize; 3];
+                for k in 0..3 {
+                    n[k] = idx(el.nodes[k])?;
+                }
+                local.push(mesh.lines.len());
+                mesh.lines.push(Lin3 {
+                    nodes: n,
+                    tag: el.element_tag,
+                });
+            }
+        }
+        for ph in phys {
+            let key = (dim, ph.abs());
+            let gi = *group_index.entry(key).or_insert_with(|| {
+                let name = names
+                    .get(&key)
+                    .cloned()
+                    .unwrap_or_else(|| format!("{}{}", if dim == 2 { "surface_" } else { "curve_" }, ph.abs()));
+                mesh.groups.push(Group {
+                    name,
+                    dim: if dim == 2 { GroupDim::Surface } else { GroupDim::Curve },
+                    tag: ph.abs(),
+                    elements: Vec::new(),
+                });
+                mesh.groups.len() - 1
+            });
+            mesh.groups[gi].elements.extend_from_slice(&local);
+        }
+    }
+    // Named groups that have no elements at all (declared but empty) are kept, so that a check
+    // can report them as empty rather than as missing.
+    for (&(dim, tag), name) in &names {
+        if (dim == 1 || dim == 2) && !group_index.contains_key(&(dim, tag)) {
+            mesh.groups.push(Group {
+                name: name.clone(),
+                dim: if dim == 2 { GroupDim::Surface } else { GroupDim::Curve },
+                tag,
+                elements: Vec::new(),
+            });
+        }
+    }
+    // Clockwise triangles are reoriented so that every element is counter-clockwise.
+    for i in 0..mesh.triangles.len() {
+        let xe = mesh.tri_coords(i);
+        if tri6::vertex_area(&xe) < 0.0 {
+            let t = &mut mesh.triangles[i];
+            t.nodes = tri6::REVERSE.map(|k| t.nodes[k]);
+            mesh.reoriented.push(t.tag);
+        }
+    }
+    Ok(mesh)
+}
+
+/// The version string of the `$MeshFormat` header, e.g. "4.1" or "2.2".
+fn header_version(bytes: &[u8]) -> Option<String> {
+    let head = &bytes[..bytes.len().min(256)];
+    let text = String::from_utf8_lossy(head);
+    let mut lines = text.lines().map(str::trim);
+    lines.find(|l| *l == "$MeshFormat")?;
+    let v = lines.next()?.split_whitespace().next()?.to_string();
+    Some(v)
+}
+
+/// Parses the `$PhysicalNames` section (always ASCII, also in binary files):
+/// `(dim, tag) → name`.
+fn physical_names(bytes: &[u8], path: &str) -> Result<HashMap<(i32, i32), String>, MeshReadError> {
+    let mut out = HashMap::new();
+    let Some(start) = find(bytes, b"$PhysicalNames") else {
+        return Ok(out);
+    };
+    let rest = &bytes[start..];
+    let end = find(rest, b"$EndPhysicalNames").ok_or_else(|| MeshReadError::PhysicalNames {
+        path: path.into(),
+        line: 0,
+        detail: "no $EndPhysicalNames".into(),
+    })?;
+    let text = String::from_utf8_lossy(&rest[..end]);
+    let line0 = bytes[..start].iter().filter(|&&b| b == b'\n').count() + 1;
+    let mut lines = text.lines().enumerate().skip(1);
+    let bad = |line: usize, detail: String| MeshReadError::PhysicalNames {
+        path: path.into(),
+        line: line0 + line,
+        detail,
+    };
+    let (ln, count) = lines.next().ok_or_else(|| bad(1, "missing count".into()))?;
+    let count: usize = count
+        .trim()
+        .parse()
+        .map_err(|_| bad(ln, format!("`{}` is not a count", count.trim())))?;
+    for _ in 0..count {
+        let (ln, l) = lines.next().ok_or_else(|| bad(ln, "fewer names than the count says".into()))?;
+        let mut it = l.trim().splitn(3, char::is_whitespace);
+        let dim: i32 = it
+            .next()
+            .and_then(|s| s.parse().ok())
+            .ok_or_else(|| bad(ln, format!("`{l}`: expected `dim tag \"name\"`")))?;
+        let tag: i32 = it
+            .next()
+            .and_then(|s| s.trim().parse().ok())
+            .ok_or_else(|| bad(ln, format!("`{l}`: expected `dim tag \"name\"`")))?;
+        let name = it.next().unwrap_or("").trim().trim_matches('"').to_string();
+        if name.is_empty() {
+            return Err(bad(ln, format!("`{l}`: empty name")));
+        }
+        out.insert((dim, tag), name);
+    }
+    Ok(out)
+}
+
+/// All node tags of the `$Nodes` section in file order (MSH 4.1, ASCII or binary).
+///
+/// mshio drops node tags when they form a dense range, without saying how they map to
+/// nodes; this reads them, so that element connectivity is resolved by tag, never by guess.
+fn node_tags_in_file_order(bytes: &[u8], binary: bool, size_t: usize) -> Option<Vec<u64>> {
+    let start = find(bytes, b"$Nodes")? + b"$Nodes".len();
+    let mut pos = start + bytes[start..].iter().position(|&b| b == b'\n')? + 1;
+    let mut tags = Vec::new();
+    if binary {
+        let rd = |pos: &mut usize, n: usize| -> Option<u64> {
+            let s = bytes.get(*pos..*pos + n)?;
+            *pos += n;
+            Some(match n {
+                4 => u32::from_le_bytes(s.try_into().ok()?) as u64,
+                8 => u64::from_le_bytes(s.try_into().ok()?),
+                _ => return None,
+            })
+        };
+        let nblocks = rd(&mut pos, size_t)?;
+        let _nnodes = rd(&mut pos, size_t)?;
+        let _min = rd(&mut pos, size_t)?;
+        let _max = rd(&mut pos, size_t)?;
+        for _ in 0..nblocks {
+            let _dim = rd(&mut pos, 4)?;
+            let _tag = rd(&mut pos, 4)?;
+            let parametric = rd(&mut pos, 4)?;
+            let n = rd(&mut pos, size_t)? as usize;
+            if parametric != 0 {
+                return None;
+            }
+            for _ in 0..n {
+                tags.push(rd(&mut pos, size_t)?);
+            }
+            pos = pos.checked_add(n.checked_mul(24)?)?;
+        }
+    } else {
+        let end = pos + find(&bytes[pos..], b"$EndNodes")?;
+        let text = std::str::from_utf8(&bytes[pos..end]).ok()?;
+        let mut it = text.split_ascii_whitespace();
+        let mut next = || it.next()?.parse::<f64>().ok();
+        let nblocks = next()? as usize;
+        next()?;
+        next()?;
+        next()?;
+        for _ in 0..nblocks {
+            next()?;
+            next()?;
+            let parametric = next()?;
+            let n = next()? as usize;
+            if parametric != 0.0 {
+                return None;
+            }
+            for _ in 0..n {
+                tags.push(next()? as u64);
+            }
+            for _ in 0..3 * n {
+                next()?;
+            }
+        }
+    }
+    Some(tags)
+}
+
+fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    hay.windows(needle.len()).position(|w| w == needle)
+}
+
+/// mshio's errors print the whole remaining input; keep the first lines only.
+fn short_parse_error(s: &str) -> String {
+    let mut out: String = s.lines().take(4).collect::<Vec<_>>().join(" | ");
+    if out.len() > 400 {
+        out.truncate(400);
+        out.push('…');
+    }
+    if out.is_empty() {
+        "malformed or truncated file".into()
+    } else {
+        out
+    }
+}
