@@ -18,6 +18,7 @@ pub mod loads;
 pub mod mesh;
 pub mod model;
 pub mod output;
+pub mod probe;
 pub mod quadrature;
 pub mod run;
 pub mod shapes;

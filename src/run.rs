@@ -77,6 +77,28 @@ pub struct Summary {
     pub output_dir: String,
 }
 
+impl Model {
+    /// Solves one load step: tractions at `scale`, the pilot driven by `control`.
+    /// Returns the free solution vector and the pilot state (if there is a pilot).
+    pub fn solve_step(&self, scale: f64, control: [Control; 2]) -> Result<(Vec<f64>, Option<PilotState>), String> {
+        let f: Vec<f64> = self
+            .f_traction
+            .iter()
+            .zip(&self.f_prescribed)
+            .map(|(a, b)| scale * a + b)
+            .collect();
+        let cond = &self.condensed;
+        let (g, _) = cond.reduce(&f, &self.chol);
+        let (u_b, pilot) = if self.dofs.pilot.is_some() {
+            let (u, r) = solve_pilot(&cond.s, &g, control)?;
+            (u.to_vec(), Some(PilotState { ux: u[0], uy: u[1], fx: r[0], fy: r[1] }))
+        } else {
+            (Vec::new(), None)
+        };
+        Ok((cond.recover(&f, &u_b, &self.chol), pilot))
+    }
+}
+
 /// Solves `S u = g + r` on the pilot DOFs with, per component, either the force `r` or the
 /// displacement `u` given. Returns (u, r).
 pub fn solve_pilot(s: &[f64], g: &[f64], control: [Control; 2]) -> Result<([f64; 2], [f64; 2]), String> {
@@ -181,22 +203,10 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
                     (None, Control::Displacement(_)) => Control::Displacement(u0[c]),
                 };
             }
-            let f: Vec<f64> = model
-                .f_traction
-                .iter()
-                .zip(&model.f_prescribed)
-                .map(|(a, b)| scale * a + b)
-                .collect();
-            let cond = &model.condensed;
-            let (g, _) = cond.reduce(&f, &model.chol);
-            let u_b = if has_pilot {
-                let (u, r) = solve_pilot(&cond.s, &g, control).map_err(|m| RunError::Solve(format!("step {step}: {m}")))?;
-                pilot = PilotState { ux: u[0], uy: u[1], fx: r[0], fy: r[1] };
-                u.to_vec()
-            } else {
-                Vec::new()
-            };
-            let u = cond.recover(&f, &u_b, &model.chol);
+            let (u, p) = model.solve_step(scale, control).map_err(|m| RunError::Solve(format!("step {step}: {m}")))?;
+            if let Some(p) = p {
+                pilot = p;
+            }
             if u.iter().any(|v| !v.is_finite()) {
                 return Err(RunError::Solve(format!("step {step}: the solution is not finite")));
             }

@@ -1,0 +1,259 @@
+//! Helpers shared by the integration tests: small meshes written as MSH 4.1 text, a plain
+//! linear solve with per-node Dirichlet values, and error norms.
+#![allow(dead_code)]
+
+use stickslip::assembly::{self, UpperCsc};
+use stickslip::condense::Condensed;
+use stickslip::dofs::{DofMap, SupportSpec};
+use stickslip::elasticity::{self, Material};
+use stickslip::linsolve::Symbolic;
+use stickslip::mesh::{Group, GroupDim, Mesh, Tri6};
+use stickslip::quadrature::TRI_7;
+use stickslip::shapes::tri6;
+use std::path::PathBuf;
+
+pub fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A fresh, empty temporary directory for one test.
+pub fn tempdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("stickslip-test-{}-{}", name, std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Writes an ASCII MSH 4.1 file: `surfaces` are (name, 6-node triangles), `curves` are
+/// (name, 3-node lines); node indices are 0-based into `nodes` (written as tags 1..).
+pub fn msh41(nodes: &[[f64; 2]], surfaces: &[(&str, Vec<[usize; 6]>)], curves: &[(&str, Vec<[usize; 3]>)]) -> String {
+    let mut s = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n");
+    s += &format!("{}\n", surfaces.len() + curves.len());
+    for (i, (n, _)) in curves.iter().enumerate() {
+        s += &format!("1 {} \"{}\"\n", i + 1, n);
+    }
+    for (i, (n, _)) in surfaces.iter().enumerate() {
+        s += &format!("2 {} \"{}\"\n", 100 + i, n);
+    }
+    s += "$EndPhysicalNames\n$Entities\n";
+    s += &format!("0 {} {} 0\n", curves.len(), surfaces.len());
+    for i in 0..curves.len() {
+        s += &format!("{} 0 0 0 1 1 0 1 {} 0\n", i + 1, i + 1);
+    }
+    for i in 0..surfaces.len() {
+        s += &format!("{} 0 0 0 1 1 0 1 {} 0\n", i + 1, 100 + i);
+    }
+    s += "$EndEntities\n$Nodes\n";
+    s += &format!("1 {} 1 {}\n2 1 0 {}\n", nodes.len(), nodes.len(), nodes.len());
+    for i in 0..nodes.len() {
+        s += &format!("{}\n", i + 1);
+    }
+    for p in nodes {
+        s += &format!("{:.17e} {:.17e} 0\n", p[0], p[1]);
+    }
+    s += "$EndNodes\n$Elements\n";
+    let ne: usize = surfaces.iter().map(|x| x.1.len()).sum::<usize>() + curves.iter().map(|x| x.1.len()).sum::<usize>();
+    s += &format!("{} {} 1 {}\n", curves.len() + surfaces.len(), ne, ne);
+    let mut tag = 1;
+    for (i, (_, ls)) in curves.iter().enumerate() {
+        s += &format!("1 {} 8 {}\n", i + 1, ls.len());
+        for l in ls {
+            s += &format!("{} {} {} {}\n", tag, l[0] + 1, l[1] + 1, l[2] + 1);
+            tag += 1;
+        }
+    }
+    for (i, (_, ts)) in surfaces.iter().enumerate() {
+        s += &format!("2 {} 9 {}\n", i + 1, ts.len());
+        for t in ts {
+            s += &format!("{}", tag);
+            for n in t {
+                s += &format!(" {}", n + 1);
+            }
+            s += "\n";
+            tag += 1;
+        }
+    }
+    s += "$EndElements\n";
+    s
+}
+
+/// A structured mesh of the rectangle [x0,x1]×[y0,y1] with `nx × ny` cells split into 6-node
+/// triangles; interior vertices moved by `distort` (fraction of the cell size, deterministic
+/// pseudo-random). Returns nodes, triangles and the boundary lines of the four sides
+/// (bottom, right, top, left).
+pub fn structured(nx: usize, ny: usize, x0: f64, x1: f64, y0: f64, y1: f64, distort: f64) -> (Vec<[f64; 2]>, Vec<[usize; 6]>, [Vec<[usize; 3]>; 4]) {
+    // Grid of (2nx+1) × (2ny+1) points; even indices are vertices.
+    let (mx, my) = (2 * nx + 1, 2 * ny + 1);
+    let id = |i: usize, j: usize| j * mx + i;
+    let mut nodes = vec![[0.0; 2]; mx * my];
+    let (hx, hy) = ((x1 - x0) / nx as f64, (y1 - y0) / ny as f64);
+    for j in 0..my {
+        for i in 0..mx {
+            nodes[id(i, j)] = [x0 + 0.5 * hx * i as f64, y0 + 0.5 * hy * j as f64];
+        }
+    }
+    // Move interior vertices, then put mid-edge nodes back at straight midpoints.
+    let mut seed = 12345u64;
+    let mut rnd = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((seed >> 33) as f64 / (1u64 << 31) as f64) - 0.5
+    };
+    for j in (2..my - 1).step_by(2) {
+        for i in (2..mx - 1).step_by(2) {
+            nodes[id(i, j)][0] += distort * hx * rnd();
+            nodes[id(i, j)][1] += distort * hy * rnd();
+        }
+    }
+    let mid = |a: [f64; 2], b: [f64; 2]| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+    let mut tris = Vec::new();
+    for cj in 0..ny {
+        for ci in 0..nx {
+            let (i, j) = (2 * ci, 2 * cj);
+            let (a, b, c, d) = (id(i, j), id(i + 2, j), id(i + 2, j + 2), id(i, j + 2));
+            tris.push([a, b, c, id(i + 1, j), id(i + 2, j + 1), id(i + 1, j + 1)]);
+            tris.push([a, c, d, id(i + 1, j + 1), id(i + 1, j + 2), id(i, j + 1)]);
+        }
+    }
+    for t in &tris {
+        for ed in tri6::EDGE_NODE_IDS {
+            nodes[t[ed[2]]] = mid(nodes[t[ed[0]]], nodes[t[ed[1]]]);
+        }
+    }
+    let bottom = (0..nx).map(|c| [id(2 * c, 0), id(2 * c + 2, 0), id(2 * c + 1, 0)]).collect();
+    let right = (0..ny).map(|c| [id(mx - 1, 2 * c), id(mx - 1, 2 * c + 2), id(mx - 1, 2 * c + 1)]).collect();
+    let top = (0..nx).map(|c| [id(2 * c + 2, my - 1), id(2 * c, my - 1), id(2 * c + 1, my - 1)]).collect();
+    let left = (0..ny).map(|c| [id(0, 2 * c + 2), id(0, 2 * c), id(0, 2 * c + 1)]).collect();
+    (nodes, tris, [bottom, right, top, left])
+}
+
+/// A `Mesh` with one body group `body` from nodes and triangles.
+pub fn mesh_from(nodes: Vec<[f64; 2]>, tris: Vec<[usize; 6]>) -> Mesh {
+    let n = tris.len();
+    Mesh {
+        source: "generated".into(),
+        node_tags: (1..=nodes.len() as u64).collect(),
+        nodes,
+        triangles: tris.into_iter().enumerate().map(|(i, t)| Tri6 { nodes: t, tag: i as u64 + 1 }).collect(),
+        lines: vec![],
+        groups: vec![Group { name: "body".into(), dim: GroupDim::Surface, tag: 1, elements: (0..n).collect() }],
+        reoriented: vec![],
+    }
+}
+
+/// Solves linear elasticity on all triangles of `mesh` with per-node prescribed displacements
+/// per component (`dirichlet(node) = [Some(ux), None]` …), a body force and extra free-vector forces from `extra`.
+/// Returns the DOF map and the free solution.
+pub fn solve_linear(
+    mesh: &Mesh,
+    mat: Material,
+    dirichlet: &dyn Fn(usize) -> [Option<f64>; 2],
+    body: Option<&dyn Fn([f64; 2]) -> [f64; 2]>,
+) -> (DofMap, Vec<f64>) {
+    solve_linear_with(mesh, mat, dirichlet, body, &|_, _| {})
+}
+
+/// As [`solve_linear`], with `extra(dofs, f)` adding further forces to the free vector.
+pub fn solve_linear_with(
+    mesh: &Mesh,
+    mat: Material,
+    dirichlet: &dyn Fn(usize) -> [Option<f64>; 2],
+    body: Option<&dyn Fn([f64; 2]) -> [f64; 2]>,
+    extra: &dyn Fn(&DofMap, &mut [f64]),
+) -> (DofMap, Vec<f64>) {
+    let elems: Vec<(usize, Material)> = (0..mesh.triangles.len()).map(|e| (e, mat)).collect();
+    let active = vec![true; mesh.nodes.len()];
+    let fixed: Vec<(usize, [Option<f64>; 2])> = (0..mesh.nodes.len())
+        .map(|n| (n, dirichlet(n)))
+        .filter(|(_, v)| v[0].is_some() || v[1].is_some())
+        .collect();
+    let single: Vec<[usize; 1]> = fixed.iter().map(|(n, _)| [*n]).collect();
+    let supports: Vec<SupportSpec> = fixed
+        .iter()
+        .zip(&single)
+        .map(|((_, u), nodes)| SupportSpec { group: "dirichlet", nodes, value: *u })
+        .collect();
+    let dofs = DofMap::build(&mesh.node_tags, &active, &supports, None, &[]).unwrap();
+    let mut k = UpperCsc::pattern(mesh, &elems, &dofs);
+    let mut f = assembly::assemble_stiffness(mesh, &elems, &dofs, &mut k);
+    if let Some(b) = body {
+        for (e, _) in &elems {
+            let fe = elasticity::element_body_force(&mesh.tri_coords(*e), b);
+            assembly::add_element_vector(&dofs, &mesh.triangles[*e].nodes, &fe, &mut f);
+        }
+    }
+    extra(&dofs, &mut f);
+    let sym = Symbolic::analyse(dofs.n_interior, &k.col_ptr, &k.row_idx).unwrap();
+    let chol = sym.factorise(&k.col_ptr, &k.row_idx, &k.values).unwrap();
+    let cond = Condensed::build(&k, dofs.n_interior, &chol);
+    let u = cond.recover(&f, &[], &chol);
+    (dofs, u)
+}
+
+/// L2 norm of the displacement error and energy norm of the error,
+/// `sqrt(∫ (ε_h − ε):D:(ε_h − ε))`, with the 7-point rule.
+pub fn error_norms(
+    mesh: &Mesh,
+    mat: &Material,
+    dofs: &DofMap,
+    u: &[f64],
+    exact: &dyn Fn([f64; 2]) -> [f64; 2],
+    exact_strain: &dyn Fn([f64; 2]) -> [f64; 3],
+) -> (f64, f64) {
+    let (mut l2, mut en) = (0.0, 0.0);
+    for (e, t) in mesh.triangles.iter().enumerate() {
+        let xe = mesh.tri_coords(e);
+        let ue: [f64; 12] = std::array::from_fn(|i| dofs.displacement(t.nodes[i / 2], u)[i % 2]);
+        for (p, w) in TRI_7.iter() {
+            let mp = tri6::map_point(&xe, p[0], p[1]);
+            let mut uh = [0.0; 2];
+            for a in 0..6 {
+                uh[0] += mp.n[a] * ue[2 * a];
+                uh[1] += mp.n[a] * ue[2 * a + 1];
+            }
+            let ux = exact(mp.x);
+            l2 += w * mp.det_j * ((uh[0] - ux[0]).powi(2) + (uh[1] - ux[1]).powi(2));
+            let eh = elasticity::strain(&mp, &ue);
+            let ex = exact_strain(mp.x);
+            let d = [eh[0] - ex[0], eh[1] - ex[1], eh[2] - ex[2]];
+            let s = mat.stress(d);
+            en += w * mp.det_j * (s[0] * d[0] + s[1] * d[1] + s[2] * d[2]);
+        }
+    }
+    (l2.sqrt(), en.sqrt())
+}
+
+/// Least-squares slope of log(err) against log(h).
+pub fn fitted_rate(h: &[f64], err: &[f64]) -> f64 {
+    let n = h.len() as f64;
+    let x: Vec<f64> = h.iter().map(|v| v.ln()).collect();
+    let y: Vec<f64> = err.iter().map(|v| v.ln()).collect();
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let sxy: f64 = x.iter().zip(&y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = x.iter().map(|a| (a - mx).powi(2)).sum();
+    sxy / sxx
+}
+
+/// Adds the consistent nodal forces of a traction field `t(x, n)` (n: outward unit normal) on
+/// the lines of a curve group, 5-point Gauss per edge.
+pub fn add_edge_traction(mesh: &Mesh, group: &str, dofs: &DofMap, f: &mut [f64], t: &dyn Fn([f64; 2], [f64; 2]) -> [f64; 2]) {
+    use stickslip::shapes::lin3;
+    let tris: Vec<usize> = (0..mesh.triangles.len()).collect();
+    let orient = stickslip::loads::EdgeOrientation::new(mesh, &tris);
+    for &l in &mesh.group(group).unwrap().elements {
+        let nodes = orient.oriented_nodes(mesh, l).unwrap();
+        let xe = nodes.map(|n| mesh.nodes[n]);
+        for &(s, w) in stickslip::quadrature::gauss_legendre(5) {
+            let tg = lin3::tangent(&xe, s);
+            let j = tg[0].hypot(tg[1]);
+            let tv = t(lin3::point(&xe, s), [tg[1] / j, -tg[0] / j]);
+            let n = lin3::n(s);
+            for a in 0..3 {
+                for c in 0..2 {
+                    if let stickslip::dofs::Dof::Free(i) = dofs.node[nodes[a]][c] {
+                        f[i] += w * j * n[a] * tv[c];
+                    }
+                }
+            }
+        }
+    }
+}

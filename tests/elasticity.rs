@@ -1,0 +1,158 @@
+//! Validation of the plane-strain 6-node element.
+//!
+//! * Patch test (completeness): a linear displacement field on a distorted gmsh mesh with
+//!   curved edges is reproduced to round-off.
+//! * Manufactured solution (smooth, with body force) over a ladder of distorted structured
+//!   meshes: fitted rates of the L2 and energy errors (theory 3 and 2 for quadratic elements).
+//! * Lamé's thick-walled cylinder under internal pressure (plane strain, closed form) on gmsh
+//!   ladders with curved and with straight-edged boundary elements.
+
+mod common;
+use common::*;
+use stickslip::case::Case;
+use stickslip::elasticity::Material;
+use stickslip::mesh::gmsh;
+use stickslip::model::Model;
+use std::f64::consts::PI;
+
+#[test]
+fn patch_test_on_distorted_curved_mesh_is_exact() {
+    let mut mesh = gmsh::read(&repo().join("meshes/patch_curved.msh")).unwrap();
+    // Boundary nodes: those of the four sides.
+    let mut boundary = vec![false; mesh.nodes.len()];
+    for g in ["left", "right", "top", "bottom"] {
+        for n in mesh.group_nodes(mesh.group(g).unwrap()) {
+            boundary[n] = true;
+        }
+    }
+    // Curve every interior mid-edge node: move it by up to 15 % of its edge length.
+    let mut moved = vec![false; mesh.nodes.len()];
+    let mut seed = 7u64;
+    for e in 0..mesh.triangles.len() {
+        let t = mesh.triangles[e].nodes;
+        for ed in stickslip::shapes::tri6::EDGE_NODE_IDS {
+            let m = t[ed[2]];
+            if boundary[m] || moved[m] {
+                continue;
+            }
+            let (a, b) = (mesh.nodes[t[ed[0]]], mesh.nodes[t[ed[1]]]);
+            let len = (a[0] - b[0]).hypot(a[1] - b[1]);
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1);
+            let r = ((seed >> 33) as f64 / (1u64 << 31) as f64) - 0.5;
+            // normal offset
+            mesh.nodes[m][0] += 0.3 * r * (b[1] - a[1]) / len * len;
+            mesh.nodes[m][1] -= 0.3 * r * (b[0] - a[0]) / len * len;
+            moved[m] = true;
+        }
+    }
+    assert!(moved.iter().filter(|m| **m).count() > 10, "the patch has interior edges to curve");
+    stickslip::mesh::check::check(&mesh, &["body"], &[]).expect("curved patch is still valid");
+    let mat = Material { e: 70.0, nu: 0.33 };
+    let lin = |x: [f64; 2]| [1e-3 + 2e-3 * x[0] - 1e-3 * x[1], -5e-4 + 4e-4 * x[0] + 3e-3 * x[1]];
+    let (dofs, u) = solve_linear(&mesh, mat, &|n| if boundary[n] { lin(mesh.nodes[n]).map(Some) } else { [None; 2] }, None);
+    let mut max_err: f64 = 0.0;
+    for n in 0..mesh.nodes.len() {
+        let (uh, ue) = (dofs.displacement(n, &u), lin(mesh.nodes[n]));
+        max_err = max_err.max((uh[0] - ue[0]).abs().max((uh[1] - ue[1]).abs()));
+    }
+    assert!(max_err < 1e-14, "patch test displacement error {max_err:e}");
+    // Constant stress at every node of every element.
+    let exact = mat.stress([2e-3, 3e-3, -1e-3 + 4e-4]);
+    for (e, t) in mesh.triangles.iter().enumerate() {
+        let ue: [f64; 12] = std::array::from_fn(|i| dofs.displacement(t.nodes[i / 2], &u)[i % 2]);
+        for s in stickslip::elasticity::nodal_stress(&mesh.tri_coords(e), &ue, &mat) {
+            for i in 0..3 {
+                assert!((s[i] - exact[i]).abs() < 1e-12 * exact[1].abs(), "element {e}: {s:?} vs {exact:?}");
+            }
+        }
+    }
+}
+
+/// u = (sin πx sin πy, sin πx sin πy) on the unit square, zero on its boundary; body force
+/// b = −(μ Δu + (λ+μ) ∇ div u).
+#[test]
+fn manufactured_solution_converges_at_rates_3_and_2() {
+    let mat = Material { e: 1.0, nu: 0.3 };
+    let (l, m) = mat.lame();
+    let exact = |x: [f64; 2]| {
+        let s = (PI * x[0]).sin() * (PI * x[1]).sin();
+        [s, s]
+    };
+    let strain = |x: [f64; 2]| {
+        let (sx, cx, sy, cy) = ((PI * x[0]).sin(), (PI * x[0]).cos(), (PI * x[1]).sin(), (PI * x[1]).cos());
+        let (dx, dy) = (PI * cx * sy, PI * sx * cy);
+        [dx, dy, dy + dx]
+    };
+    let body = move |x: [f64; 2]| {
+        let ss = (PI * x[0]).sin() * (PI * x[1]).sin();
+        let cc = (PI * x[0]).cos() * (PI * x[1]).cos();
+        let v = PI * PI * ((l + 3.0 * m) * ss - (l + m) * cc);
+        [v, v]
+    };
+    let (mut hs, mut e2, mut ee) = (vec![], vec![], vec![]);
+    for n in [4, 8, 16, 32] {
+        let (nodes, tris, _) = structured(n, n, 0.0, 1.0, 0.0, 1.0, 0.25);
+        let mesh = mesh_from(nodes, tris);
+        let on_boundary = |x: [f64; 2]| x[0].abs() < 1e-12 || x[1].abs() < 1e-12 || (x[0] - 1.0).abs() < 1e-12 || (x[1] - 1.0).abs() < 1e-12;
+        let (dofs, u) = solve_linear(&mesh, mat, &|k| if on_boundary(mesh.nodes[k]) { [Some(0.0); 2] } else { [None; 2] }, Some(&body));
+        let (a, b) = error_norms(&mesh, &mat, &dofs, &u, &exact, &strain);
+        hs.push(1.0 / n as f64);
+        e2.push(a);
+        ee.push(b);
+    }
+    let (r2, re) = (fitted_rate(&hs, &e2), fitted_rate(&hs, &ee));
+    println!("manufactured: L2 errors {e2:?} rate {r2:.3}; energy errors {ee:?} rate {re:.3}");
+    assert!(r2 >= 2.8, "L2 rate {r2}");
+    assert!(re >= 1.8, "energy rate {re}");
+}
+
+/// Lamé, plane strain, inner radius 1 (pressure p), outer radius 2 (free):
+/// u_r = (1+ν)/E · p a²/(b²−a²) · [(1−2ν) r + b²/r].
+fn lame_errors(prefix: &str) -> (Vec<f64>, Vec<f64>) {
+    let (e, nu, p, a, b) = (1.0, 0.3, 1.0, 1.0, 2.0);
+    let c = (1.0 + nu) / e * p * a * a / (b * b - a * a);
+    let ur = move |r: f64| c * ((1.0 - 2.0 * nu) * r + b * b / r);
+    let dur = move |r: f64| c * ((1.0 - 2.0 * nu) - b * b / (r * r));
+    let exact = move |x: [f64; 2]| {
+        let r = x[0].hypot(x[1]);
+        [ur(r) * x[0] / r, ur(r) * x[1] / r]
+    };
+    let strain = move |x: [f64; 2]| {
+        let r = x[0].hypot(x[1]);
+        let (cs, sn) = (x[0] / r, x[1] / r);
+        let (err, ett) = (dur(r), ur(r) / r);
+        [err * cs * cs + ett * sn * sn, err * sn * sn + ett * cs * cs, 2.0 * (err - ett) * sn * cs]
+    };
+    let mat = Material { e, nu };
+    let (mut hs, mut errs) = (vec![], vec![]);
+    for level in 0..5 {
+        let mesh_path = repo().join(format!("meshes/{prefix}_L{level}.msh"));
+        let json = format!(
+            r#"{{"mesh": "{}", "bodies": [{{"group": "body", "E": {e}, "nu": {nu}}}],
+               "supports": [{{"group": "sym_x", "uy": 0.0}}, {{"group": "sym_y", "ux": 0.0}}],
+               "tractions": [{{"group": "inner", "kind": "pressure", "p": {p}}}],
+               "stages": [{{"steps": 1, "traction_scale": 1.0}}]}}"#,
+            mesh_path.display()
+        );
+        let case: Case = serde_json::from_str(&json).unwrap();
+        case.validate("lame").unwrap();
+        let model = Model::build(&case, &mesh_path).unwrap();
+        let (u, _) = model.solve_step(1.0, [stickslip::case::Control::Force(0.0); 2]).unwrap();
+        let (l2, _) = error_norms(&model.mesh, &mat, &model.dofs, &u, &exact, &strain);
+        let info = stickslip::mesh::info::info(&model.mesh);
+        hs.push(info.groups.iter().find(|g| g.name == "inner").unwrap().h_max);
+        errs.push(l2);
+    }
+    (hs, errs)
+}
+
+#[test]
+fn lame_cylinder_curved_edges_keep_the_full_rate() {
+    let (h, err) = lame_errors("lame");
+    let (hs, errs) = lame_errors("lame_straight");
+    let (rc, rs) = (fitted_rate(&h, &err), fitted_rate(&hs, &errs));
+    println!("Lamé L2 errors: curved {err:?} (rate {rc:.3}); straight {errs:?} (rate {rs:.3})");
+    assert!(rc >= 2.8, "curved-edge rate {rc}");
+    assert!(rs < 2.4 && rs > 1.6, "straight-edged rate {rs} should fall to about 2");
+    assert!(errs[4] > 10.0 * err[4], "straight edges must be markedly worse on the finest mesh");
+}
