@@ -25,6 +25,9 @@ pub struct Condensed {
     pub s: Vec<f64>,
     /// `K_IB` by retained column: (interior row, value).
     k_ib: Vec<Vec<(usize, f64)>>,
+    /// Largest diagonal entry of `K_BB` before condensation: the scale against which a
+    /// vanishing pivot of `S` (a retained DOF that nothing holds) is judged.
+    pub kbb_scale: f64,
 }
 
 /// Columns solved per block when building `S`.
@@ -48,6 +51,7 @@ impl Condensed {
                 }
             }
         }
+        let kbb_scale = (0..n_b).map(|i| s[i * n_b + i].abs()).fold(0.0, f64::max);
         for start in (0..n_b).step_by(BLOCK) {
             let cols = BLOCK.min(n_b - start);
             let mut x = vec![0.0; n_i * cols];
@@ -81,7 +85,7 @@ impl Condensed {
                 s[j * n_b + i] = m;
             }
         }
-        Condensed { n_i, n_b, s, k_ib }
+        Condensed { n_i, n_b, s, k_ib, kbb_scale }
     }
 
     /// `g = f_B − K_BI K_II⁻¹ f_I`, and `x_f = K_II⁻¹ f_I` for later recovery.

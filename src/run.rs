@@ -75,6 +75,8 @@ pub struct Summary {
     pub peak_memory_mib: Option<f64>,
     pub steps: Vec<StepRecord>,
     pub output_dir: String,
+    /// `completed`, or why the run stopped early.
+    pub status: String,
 }
 
 impl Model {
@@ -90,7 +92,7 @@ impl Model {
         let cond = &self.condensed;
         let (g, _) = cond.reduce(&f, &self.chol);
         let (u_b, pilot) = if self.dofs.pilot.is_some() {
-            let (u, r) = solve_pilot(&cond.s, &g, control)?;
+            let (u, r) = solve_pilot(&cond.s, &g, control, cond.kbb_scale)?;
             (u.to_vec(), Some(PilotState { ux: u[0], uy: u[1], fx: r[0], fy: r[1] }))
         } else {
             (Vec::new(), None)
@@ -100,8 +102,9 @@ impl Model {
 }
 
 /// Solves `S u = g + r` on the pilot DOFs with, per component, either the force `r` or the
-/// displacement `u` given. Returns (u, r).
-pub fn solve_pilot(s: &[f64], g: &[f64], control: [Control; 2]) -> Result<([f64; 2], [f64; 2]), String> {
+/// displacement `u` given. Returns (u, r). `scale` is the stiffness scale of the pilot
+/// before condensation: a pivot below 1e-10 of it means nothing holds the pilot.
+pub fn solve_pilot(s: &[f64], g: &[f64], control: [Control; 2], scale: f64) -> Result<([f64; 2], [f64; 2]), String> {
     let mut u = [0.0; 2];
     let mut r = [0.0; 2];
     let mut free = Vec::new();
@@ -119,18 +122,17 @@ pub fn solve_pilot(s: &[f64], g: &[f64], control: [Control; 2]) -> Result<([f64;
         .iter()
         .map(|&i| g[i] + r[i] - (0..2).filter(|j| !free.contains(j)).map(|j| s[i * 2 + j] * u[j]).sum::<f64>())
         .collect();
-    let scale = s[0].abs().max(s[3].abs());
     match free.len() {
         1 => {
             let i = free[0];
-            if s[i * 2 + i].abs() <= 1e-12 * scale {
+            if s[i * 2 + i].abs() <= 1e-10 * scale {
                 return Err(singular());
             }
             u[i] = rhs[0] / s[i * 2 + i];
         }
         2 => {
             let det = s[0] * s[3] - s[1] * s[2];
-            if det.abs() <= 1e-12 * scale * scale {
+            if s[0].abs().min(s[3].abs()) <= 1e-10 * scale || det.abs() <= 1e-10 * scale * scale {
                 return Err(singular());
             }
             u[0] = (s[3] * rhs[0] - s[1] * rhs[1]) / det;
@@ -183,7 +185,8 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
     let mut pvd = Vec::new();
     let mut step = 0;
     let (mut t_solve, mut t_write) = (0.0, 0.0);
-    for (si, stage) in case.stages.iter().enumerate() {
+    let mut failure: Option<String> = None;
+    'stages: for (si, stage) in case.stages.iter().enumerate() {
         let start = (pilot, scale);
         let target = [stage.pilot_x, stage.pilot_y];
         for k in 1..=stage.steps {
@@ -203,12 +206,19 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
                     (None, Control::Displacement(_)) => Control::Displacement(u0[c]),
                 };
             }
-            let (u, p) = model.solve_step(scale, control).map_err(|m| RunError::Solve(format!("step {step}: {m}")))?;
+            let (u, p) = match model.solve_step(scale, control) {
+                Ok(v) => v,
+                Err(m) => {
+                    failure = Some(format!("step {step}: {m}"));
+                    break 'stages;
+                }
+            };
             if let Some(p) = p {
                 pilot = p;
             }
             if u.iter().any(|v| !v.is_finite()) {
-                return Err(RunError::Solve(format!("step {step}: the solution is not finite")));
+                failure = Some(format!("step {step}: the solution is not finite"));
+                break 'stages;
             }
             t_solve += t.elapsed().as_secs_f64();
             let time = si as f64 + alpha;
@@ -259,8 +269,15 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
         peak_memory_mib: output::peak_memory_bytes().map(|b| b as f64 / (1024.0 * 1024.0)),
         steps: records,
         output_dir: out_dir.display().to_string(),
+        status: match &failure {
+            None => "completed".into(),
+            Some(m) => format!("failed at {m}; the output holds the steps before it"),
+        },
     };
     wr(&out_dir.join("summary.json"), serde_json::to_string_pretty(&summary).expect("serialisable").as_bytes())?;
+    if let Some(m) = failure {
+        return Err(RunError::Solve(m));
+    }
     if !opts.quiet {
         eprintln!(
             "{}: {} steps, {} nodes, {} triangles, {} DOFs; assemble {:.3} s, factorise {:.3} s, solve {:.3} s; output in {}",
