@@ -5,7 +5,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "stickslip", version, about = "Plane-strain FE for frictional contact of two half-cylinders with slip-weakening friction")]
+#[command(
+    name = "stickslip",
+    version,
+    about = "Plane-strain FE for frictional contact of two half-cylinders with slip-weakening friction"
+)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
@@ -27,6 +31,8 @@ enum Cmd {
         #[arg(long)]
         quiet: bool,
     },
+    /// The paper's closed forms: scalars as JSON, curves as CSV.
+    Analytic(stickslip::analytic::cli::AnalyticArgs),
     /// Print counts, groups, element sizes and quality figures of a gmsh mesh (JSON).
     MeshInfo {
         /// The mesh file (gmsh MSH 4.1).
@@ -51,7 +57,12 @@ fn set_threads(n: Option<usize>) -> Result<(), String> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.cmd {
-        Cmd::Run { case, out, threads, quiet } => {
+        Cmd::Run {
+            case,
+            out,
+            threads,
+            quiet,
+        } => {
             if threads == Some(0) {
                 eprintln!("error: --threads must be at least 1");
                 return ExitCode::from(2);
@@ -69,10 +80,23 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Cmd::Analytic(args) => {
+            let mut out = std::io::stdout().lock();
+            match stickslip::analytic::cli::run(&args, &mut out) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            }
+        }
         Cmd::MeshInfo { mesh } => match stickslip::mesh::gmsh::read(&mesh) {
             Ok(m) => {
                 let info = stickslip::mesh::info::info(&m);
-                println!("{}", serde_json::to_string_pretty(&info).expect("serialisable"));
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&info).expect("serialisable")
+                );
                 ExitCode::SUCCESS
             }
             Err(e) => {

@@ -39,6 +39,9 @@ pub enum ModelError {
 pub struct Timings {
     pub read: f64,
     pub assemble: f64,
+    /// Symbolic analysis (fill-reducing ordering, elimination tree), done once per pattern.
+    pub analyse: f64,
+    /// Numeric Cholesky factorisation.
     pub factorise: f64,
     pub condense: f64,
     pub solve: f64,
@@ -112,7 +115,10 @@ impl Model {
             for &l in &g.elements {
                 orient
                     .oriented_coords(&mesh, l, name)
-                    .map_err(|source| ModelError::Edge { path: path.clone(), source })?;
+                    .map_err(|source| ModelError::Edge {
+                        path: path.clone(),
+                        source,
+                    })?;
             }
         }
 
@@ -139,10 +145,16 @@ impl Model {
             &mesh.node_tags,
             &active,
             &supports,
-            case.pilot.as_ref().map(|p| p.group.as_str()).zip(pilot_nodes.as_deref()),
+            case.pilot
+                .as_ref()
+                .map(|p| p.group.as_str())
+                .zip(pilot_nodes.as_deref()),
             &[],
         )
-        .map_err(|source| ModelError::Dof { path: path.clone(), source })?;
+        .map_err(|source| ModelError::Dof {
+            path: path.clone(),
+            source,
+        })?;
 
         let t = Instant::now();
         let mut k = UpperCsc::pattern(&mesh, &elems, &dofs);
@@ -154,7 +166,9 @@ impl Model {
                     tx: spec.tx.unwrap_or(0.0),
                     ty: spec.ty.unwrap_or(0.0),
                 },
-                TractionKind::Pressure => Traction::Pressure { p: spec.p.expect("validated") },
+                TractionKind::Pressure => Traction::Pressure {
+                    p: spec.p.expect("validated"),
+                },
                 TractionKind::Hertz => Traction::Hertz {
                     p0: spec.p0.expect("validated"),
                     a: spec.a.expect("validated"),
@@ -179,6 +193,8 @@ impl Model {
 
         let t = Instant::now();
         let symbolic = Symbolic::analyse(dofs.n_interior, &k.col_ptr, &k.row_idx)?;
+        timings.analyse = t.elapsed().as_secs_f64();
+        let t = Instant::now();
         let chol = symbolic.factorise(&k.col_ptr, &k.row_idx, &k.values)?;
         timings.factorise = t.elapsed().as_secs_f64();
         let t = Instant::now();
@@ -209,7 +225,8 @@ impl Model {
             .par_iter()
             .map(|(e, mat)| {
                 let nodes = &self.mesh.triangles[*e].nodes;
-                let ue: [f64; 12] = std::array::from_fn(|i| self.dofs.displacement(nodes[i / 2], u)[i % 2]);
+                let ue: [f64; 12] =
+                    std::array::from_fn(|i| self.dofs.displacement(nodes[i / 2], u)[i % 2]);
                 elasticity::nodal_stress(&self.mesh.tri_coords(*e), &ue, mat)
             })
             .collect();

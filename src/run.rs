@@ -3,7 +3,7 @@
 
 use crate::case::{Case, Control};
 use crate::model::{Model, ModelError};
-use crate::output::{self, vtu, PvdEntry};
+use crate::output::{self, PvdEntry, vtu};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -18,14 +18,24 @@ pub enum RunError {
     #[error("{0}")]
     Solve(String),
     #[error("cannot write output `{path}`: {source}")]
-    Write { path: String, source: std::io::Error },
+    Write {
+        path: String,
+        source: std::io::Error,
+    },
 }
 
 impl RunError {
     /// Process exit status: 2 for bad input, 3 for a solver failure, 4 for output errors.
     pub fn exit_code(&self) -> i32 {
         match self {
-            RunError::Case(_) | RunError::Model(ModelError::MeshRead(_) | ModelError::MeshCheck(_) | ModelError::Dof { .. } | ModelError::Edge { .. } | ModelError::Unsupported(_)) => 2,
+            RunError::Case(_)
+            | RunError::Model(
+                ModelError::MeshRead(_)
+                | ModelError::MeshCheck(_)
+                | ModelError::Dof { .. }
+                | ModelError::Edge { .. }
+                | ModelError::Unsupported(_),
+            ) => 2,
             RunError::Model(ModelError::Factor(_)) | RunError::Solve(_) => 3,
             RunError::Write { .. } => 4,
         }
@@ -82,7 +92,11 @@ pub struct Summary {
 impl Model {
     /// Solves one load step: tractions at `scale`, the pilot driven by `control`.
     /// Returns the free solution vector and the pilot state (if there is a pilot).
-    pub fn solve_step(&self, scale: f64, control: [Control; 2]) -> Result<(Vec<f64>, Option<PilotState>), String> {
+    pub fn solve_step(
+        &self,
+        scale: f64,
+        control: [Control; 2],
+    ) -> Result<(Vec<f64>, Option<PilotState>), String> {
         let f: Vec<f64> = self
             .f_traction
             .iter()
@@ -93,7 +107,15 @@ impl Model {
         let (g, _) = cond.reduce(&f, &self.chol);
         let (u_b, pilot) = if self.dofs.pilot.is_some() {
             let (u, r) = solve_pilot(&cond.s, &g, control, cond.kbb_scale)?;
-            (u.to_vec(), Some(PilotState { ux: u[0], uy: u[1], fx: r[0], fy: r[1] }))
+            (
+                u.to_vec(),
+                Some(PilotState {
+                    ux: u[0],
+                    uy: u[1],
+                    fx: r[0],
+                    fy: r[1],
+                }),
+            )
         } else {
             (Vec::new(), None)
         };
@@ -104,7 +126,12 @@ impl Model {
 /// Solves `S u = g + r` on the pilot DOFs with, per component, either the force `r` or the
 /// displacement `u` given. Returns (u, r). `scale` is the stiffness scale of the pilot
 /// before condensation: a pivot below 1e-10 of it means nothing holds the pilot.
-pub fn solve_pilot(s: &[f64], g: &[f64], control: [Control; 2], scale: f64) -> Result<([f64; 2], [f64; 2]), String> {
+pub fn solve_pilot(
+    s: &[f64],
+    g: &[f64],
+    control: [Control; 2],
+    scale: f64,
+) -> Result<([f64; 2], [f64; 2]), String> {
     let mut u = [0.0; 2];
     let mut r = [0.0; 2];
     let mut free = Vec::new();
@@ -120,7 +147,13 @@ pub fn solve_pilot(s: &[f64], g: &[f64], control: [Control; 2], scale: f64) -> R
     // S_FF u_F = g_F + r_F − S_FD u_D
     let rhs: Vec<f64> = free
         .iter()
-        .map(|&i| g[i] + r[i] - (0..2).filter(|j| !free.contains(j)).map(|j| s[i * 2 + j] * u[j]).sum::<f64>())
+        .map(|&i| {
+            g[i] + r[i]
+                - (0..2)
+                    .filter(|j| !free.contains(j))
+                    .map(|j| s[i * 2 + j] * u[j])
+                    .sum::<f64>()
+        })
         .collect();
     match free.len() {
         1 => {
@@ -156,9 +189,18 @@ fn singular() -> String {
 pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
     let case = Case::load(case_path)?;
     let model = Model::build(&case, case_path)?;
-    let out_dir = opts.out.clone().or(case.output.dir.clone()).unwrap_or_else(|| {
-        PathBuf::from("out").join(case_path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or("case".into()))
-    });
+    let out_dir = opts
+        .out
+        .clone()
+        .or(case.output.dir.clone())
+        .unwrap_or_else(|| {
+            PathBuf::from("out").join(
+                case_path
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().to_string())
+                    .unwrap_or("case".into()),
+            )
+        });
     run_model(&case, case_path, model, &out_dir, opts)
 }
 
@@ -170,12 +212,21 @@ fn wr(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
 }
 
 /// Steps through the stages of a built model, writing output to `out_dir`.
-pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
+pub fn run_model(
+    case: &Case,
+    case_path: &Path,
+    mut model: Model,
+    out_dir: &Path,
+    opts: &RunOptions,
+) -> Result<Summary, RunError> {
     std::fs::create_dir_all(out_dir).map_err(|source| RunError::Write {
         path: out_dir.display().to_string(),
         source,
     })?;
-    let stem = case_path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or("case".into());
+    let stem = case_path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or("case".into());
     let total = case.total_steps();
     let has_pilot = model.dofs.pilot.is_some();
     let mut control = [Control::Force(0.0); 2];
@@ -201,7 +252,9 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
             for c in 0..2 {
                 control[c] = match (target[c], control[c]) {
                     (Some(Control::Force(f)), _) => Control::Force(r0[c] + alpha * (f - r0[c])),
-                    (Some(Control::Displacement(d)), _) => Control::Displacement(u0[c] + alpha * (d - u0[c])),
+                    (Some(Control::Displacement(d)), _) => {
+                        Control::Displacement(u0[c] + alpha * (d - u0[c]))
+                    }
                     (None, Control::Force(_)) => Control::Force(r0[c]),
                     (None, Control::Displacement(_)) => Control::Displacement(u0[c]),
                 };
@@ -232,12 +285,22 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
             if case.output.vtu && (step % case.output.every == 0 || step == total) {
                 let t = Instant::now();
                 let name = format!("{stem}_{step:04}.vtu");
-                wr(&out_dir.join(&name), &bodies_vtu(&model, &u, case).map_err(|e| RunError::Write {
-                    path: name.clone(),
-                    source: std::io::Error::other(e.to_string()),
-                })?)?;
-                pvd.push(PvdEntry { time, part: 0, file: name });
-                wr(&out_dir.join(format!("{stem}.pvd")), output::pvd(&pvd).as_bytes())?;
+                wr(
+                    &out_dir.join(&name),
+                    &bodies_vtu(&model, &u, case).map_err(|e| RunError::Write {
+                        path: name.clone(),
+                        source: std::io::Error::other(e.to_string()),
+                    })?,
+                )?;
+                pvd.push(PvdEntry {
+                    time,
+                    part: 0,
+                    file: name,
+                });
+                wr(
+                    &out_dir.join(format!("{stem}.pvd")),
+                    output::pvd(&pvd).as_bytes(),
+                )?;
                 t_write += t.elapsed().as_secs_f64();
             }
         }
@@ -248,12 +311,34 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
         .iter()
         .map(|r| {
             let p = r.pilot.unwrap_or_default();
-            vec![r.step as f64, r.stage as f64, r.time, r.traction_scale, p.ux, p.uy, p.fx, p.fy]
+            vec![
+                r.step as f64,
+                r.stage as f64,
+                r.time,
+                r.traction_scale,
+                p.ux,
+                p.uy,
+                p.fx,
+                p.fy,
+            ]
         })
         .collect();
     wr(
         &out_dir.join("history.csv"),
-        output::csv(&["step", "stage", "time", "traction_scale", "pilot_ux", "pilot_uy", "pilot_fx", "pilot_fy"], &rows).as_bytes(),
+        output::csv(
+            &[
+                "step",
+                "stage",
+                "time",
+                "traction_scale",
+                "pilot_ux",
+                "pilot_uy",
+                "pilot_fx",
+                "pilot_fy",
+            ],
+            &rows,
+        )
+        .as_bytes(),
     )?;
     let summary = Summary {
         case: case_path.display().to_string(),
@@ -274,7 +359,12 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
             Some(m) => format!("failed at {m}; the output holds the steps before it"),
         },
     };
-    wr(&out_dir.join("summary.json"), serde_json::to_string_pretty(&summary).expect("serialisable").as_bytes())?;
+    wr(
+        &out_dir.join("summary.json"),
+        serde_json::to_string_pretty(&summary)
+            .expect("serialisable")
+            .as_bytes(),
+    )?;
     if let Some(m) = failure {
         return Err(RunError::Solve(m));
     }
@@ -324,7 +414,13 @@ pub fn bodies_vtu(model: &Model, u: &[f64], case: &Case) -> Result<Vec<u8>, vtki
     let cells: Vec<Vec<usize>> = model
         .elems
         .iter()
-        .map(|(e, _)| model.mesh.triangles[*e].nodes.iter().map(|&n| index[n]).collect())
+        .map(|(e, _)| {
+            model.mesh.triangles[*e]
+                .nodes
+                .iter()
+                .map(|&n| index[n])
+                .collect()
+        })
         .collect();
     let body: Vec<f64> = model.elem_body.iter().map(|&b| b as f64).collect();
     vtu::unstructured(
