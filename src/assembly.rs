@@ -78,7 +78,12 @@ impl UpperCsc {
 
 /// Fills `k.values` with the stiffness of the given elements and returns the forces on the free
 /// DOFs due to the prescribed displacements, `−K_fp u_p`.
-pub fn assemble_stiffness(mesh: &Mesh, elems: &[(usize, Material)], dofs: &DofMap, k: &mut UpperCsc) -> Vec<f64> {
+pub fn assemble_stiffness(
+    mesh: &Mesh,
+    elems: &[(usize, Material)],
+    dofs: &DofMap,
+    k: &mut UpperCsc,
+) -> Vec<f64> {
     let kes: Vec<[f64; 144]> = elems
         .par_iter()
         .map(|(e, mat)| elasticity::element_stiffness(&mesh.tri_coords(*e), mat))

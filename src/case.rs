@@ -182,7 +182,10 @@ impl Case {
     /// Reads, parses and validates a case file.
     pub fn load(path: &Path) -> Result<Case, CaseError> {
         let p = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| CaseError::Io { path: p.clone(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| CaseError::Io {
+            path: p.clone(),
+            source,
+        })?;
         let case: Case = serde_json::from_str(&text).map_err(|e| CaseError::Syntax {
             path: p.clone(),
             detail: e.to_string(),
@@ -193,7 +196,10 @@ impl Case {
 
     /// The mesh path resolved against the directory of the case file.
     pub fn mesh_path(&self, case_path: &Path) -> PathBuf {
-        case_path.parent().unwrap_or(Path::new(".")).join(&self.mesh)
+        case_path
+            .parent()
+            .unwrap_or(Path::new("."))
+            .join(&self.mesh)
     }
 
     /// Checks every value against its allowed range; the error names the key.
@@ -205,25 +211,49 @@ impl Case {
             why: why.into(),
         };
         let finite = |key: String, v: f64| -> Result<(), CaseError> {
-            if v.is_finite() { Ok(()) } else { Err(bad(key, format!("{v}"), "must be a finite number")) }
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(bad(key, format!("{v}"), "must be a finite number"))
+            }
         };
         if self.bodies.is_empty() {
-            return Err(bad("bodies".into(), "[]".into(), "at least one body is needed"));
+            return Err(bad(
+                "bodies".into(),
+                "[]".into(),
+                "at least one body is needed",
+            ));
         }
         for (i, b) in self.bodies.iter().enumerate() {
             if !(b.e > 0.0 && b.e.is_finite()) {
-                return Err(bad(format!("bodies[{i}].E"), format!("{}", b.e), "must be > 0 and finite"));
+                return Err(bad(
+                    format!("bodies[{i}].E"),
+                    format!("{}", b.e),
+                    "must be > 0 and finite",
+                ));
             }
             if !(b.nu > -1.0 && b.nu < 0.5) {
-                return Err(bad(format!("bodies[{i}].nu"), format!("{}", b.nu), "must satisfy −1 < ν < 0.5"));
+                return Err(bad(
+                    format!("bodies[{i}].nu"),
+                    format!("{}", b.nu),
+                    "must satisfy −1 < ν < 0.5",
+                ));
             }
             if self.bodies[..i].iter().any(|o| o.group == b.group) {
-                return Err(bad(format!("bodies[{i}].group"), b.group.clone(), "body listed twice"));
+                return Err(bad(
+                    format!("bodies[{i}].group"),
+                    b.group.clone(),
+                    "body listed twice",
+                ));
             }
         }
         for (i, s) in self.supports.iter().enumerate() {
             if s.ux.is_none() && s.uy.is_none() {
-                return Err(bad(format!("supports[{i}]"), s.group.clone(), "give `ux`, `uy` or both"));
+                return Err(bad(
+                    format!("supports[{i}]"),
+                    s.group.clone(),
+                    "give `ux`, `uy` or both",
+                ));
             }
             for (k, v) in [("ux", s.ux), ("uy", s.uy)] {
                 if let Some(v) = v {
@@ -233,13 +263,23 @@ impl Case {
         }
         for (i, t) in self.tractions.iter().enumerate() {
             let need = |k: &str, v: Option<f64>| -> Result<f64, CaseError> {
-                let v = v.ok_or_else(|| bad(format!("tractions[{i}].{k}"), "missing".into(), "required for this kind"))?;
+                let v = v.ok_or_else(|| {
+                    bad(
+                        format!("tractions[{i}].{k}"),
+                        "missing".into(),
+                        "required for this kind",
+                    )
+                })?;
                 finite(format!("tractions[{i}].{k}"), v)?;
                 Ok(v)
             };
             let forbid = |k: &str, v: Option<f64>| -> Result<(), CaseError> {
                 match v {
-                    Some(x) => Err(bad(format!("tractions[{i}].{k}"), format!("{x}"), "not used by this kind")),
+                    Some(x) => Err(bad(
+                        format!("tractions[{i}].{k}"),
+                        format!("{x}"),
+                        "not used by this kind",
+                    )),
                     None => Ok(()),
                 }
             };
@@ -253,7 +293,13 @@ impl Case {
                 }
                 TractionKind::Pressure => {
                     need("p", t.p)?;
-                    for (k, v) in [("tx", t.tx), ("ty", t.ty), ("p0", t.p0), ("a", t.a), ("x0", t.x0)] {
+                    for (k, v) in [
+                        ("tx", t.tx),
+                        ("ty", t.ty),
+                        ("p0", t.p0),
+                        ("a", t.a),
+                        ("x0", t.x0),
+                    ] {
                         forbid(k, v)?;
                     }
                 }
@@ -261,7 +307,11 @@ impl Case {
                     need("p0", t.p0)?;
                     let a = need("a", t.a)?;
                     if a <= 0.0 {
-                        return Err(bad(format!("tractions[{i}].a"), format!("{a}"), "must be > 0"));
+                        return Err(bad(
+                            format!("tractions[{i}].a"),
+                            format!("{a}"),
+                            "must be > 0",
+                        ));
                     }
                     need("x0", t.x0.or(Some(0.0)))?;
                     for (k, v) in [("tx", t.tx), ("ty", t.ty), ("p", t.p)] {
@@ -271,16 +321,28 @@ impl Case {
             }
         }
         if self.stages.is_empty() {
-            return Err(bad("stages".into(), "[]".into(), "at least one stage is needed"));
+            return Err(bad(
+                "stages".into(),
+                "[]".into(),
+                "at least one stage is needed",
+            ));
         }
         for (i, s) in self.stages.iter().enumerate() {
             if s.steps == 0 || s.steps > 100_000 {
-                return Err(bad(format!("stages[{i}].steps"), format!("{}", s.steps), "must be between 1 and 100000"));
+                return Err(bad(
+                    format!("stages[{i}].steps"),
+                    format!("{}", s.steps),
+                    "must be between 1 and 100000",
+                ));
             }
             for (k, c) in [("pilot_x", s.pilot_x), ("pilot_y", s.pilot_y)] {
                 if let Some(c) = c {
                     if self.pilot.is_none() {
-                        return Err(bad(format!("stages[{i}].{k}"), format!("{c:?}"), "there is no `pilot` in this case"));
+                        return Err(bad(
+                            format!("stages[{i}].{k}"),
+                            format!("{c:?}"),
+                            "there is no `pilot` in this case",
+                        ));
                     }
                     let (Control::Force(v) | Control::Displacement(v)) = c;
                     finite(format!("stages[{i}].{k}"), v)?;

@@ -85,7 +85,13 @@ impl Condensed {
                 s[j * n_b + i] = m;
             }
         }
-        Condensed { n_i, n_b, s, k_ib, kbb_scale }
+        Condensed {
+            n_i,
+            n_b,
+            s,
+            k_ib,
+            kbb_scale,
+        }
     }
 
     /// `g = f_B − K_BI K_II⁻¹ f_I`, and `x_f = K_II⁻¹ f_I` for later recovery.
@@ -114,7 +120,11 @@ impl Condensed {
     /// `S u_B` (the forces the retained DOFs need, less `g`).
     pub fn s_mul(&self, u_b: &[f64]) -> Vec<f64> {
         (0..self.n_b)
-            .map(|i| (0..self.n_b).map(|j| self.s[i * self.n_b + j] * u_b[j]).sum())
+            .map(|i| {
+                (0..self.n_b)
+                    .map(|j| self.s[i * self.n_b + j] * u_b[j])
+                    .sum()
+            })
             .collect()
     }
 }

@@ -34,7 +34,9 @@ pub struct DofMap {
 /// A DOF that cannot be numbered as asked.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum DofError {
-    #[error("node {node} is both supported (group `{support}`) and on the rigid pilot face (group `{pilot}`)")]
+    #[error(
+        "node {node} is both supported (group `{support}`) and on the rigid pilot face (group `{pilot}`)"
+    )]
     SupportOnPilot {
         node: u64,
         support: String,

@@ -23,7 +23,10 @@ impl Material {
     /// Lamé constants (λ, μ) of plane strain.
     pub fn lame(&self) -> (f64, f64) {
         let (e, nu) = (self.e, self.nu);
-        (e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), e / (2.0 * (1.0 + nu)))
+        (
+            e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+            e / (2.0 * (1.0 + nu)),
+        )
     }
 
     /// Plane-strain modulus `E/(1 − ν²)`.
@@ -122,7 +125,8 @@ pub fn nodal_stress(xe: &[[f64; 2]; 6], ue: &[f64; 12], mat: &Material) -> [[f64
 
 /// von Mises equivalent stress including σzz.
 pub fn von_mises(sxx: f64, syy: f64, sxy: f64, szz: f64) -> f64 {
-    (0.5 * ((sxx - syy).powi(2) + (syy - szz).powi(2) + (szz - sxx).powi(2)) + 3.0 * sxy * sxy).sqrt()
+    (0.5 * ((sxx - syy).powi(2) + (syy - szz).powi(2) + (szz - sxx).powi(2)) + 3.0 * sxy * sxy)
+        .sqrt()
 }
 
 #[cfg(test)]
@@ -174,7 +178,11 @@ mod tests {
         let (a, b, c, d) = (1e-3, 2e-3, -5e-4, 7e-4);
         let ue: [f64; 12] = std::array::from_fn(|i| {
             let x = xe[i / 2];
-            if i % 2 == 0 { a * x[0] + b * x[1] } else { c * x[0] + d * x[1] }
+            if i % 2 == 0 {
+                a * x[0] + b * x[1]
+            } else {
+                c * x[0] + d * x[1]
+            }
         });
         let exact = mat.stress([a, d, b + c]);
         for s in nodal_stress(&xe, &ue, &mat) {

@@ -33,26 +33,44 @@ pub struct Cholesky {
     n: usize,
 }
 
-fn sym<'a>(n: usize, col_ptr: &'a [usize], row_idx: &'a [usize]) -> SymbolicSparseColMatRef<'a, usize> {
+fn sym<'a>(
+    n: usize,
+    col_ptr: &'a [usize],
+    row_idx: &'a [usize],
+) -> SymbolicSparseColMatRef<'a, usize> {
     SymbolicSparseColMatRef::new_checked(n, n, &col_ptr[..=n], None, &row_idx[..col_ptr[n]])
 }
 
 impl Symbolic {
     /// Analyses the leading `n` columns of an upper-triangular CSC pattern.
-    pub fn analyse(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Result<Symbolic, FactorError> {
+    pub fn analyse(
+        n: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+    ) -> Result<Symbolic, FactorError> {
         let inner = SymbolicLlt::try_new(sym(n, col_ptr, row_idx), Side::Upper)
             .map_err(|e| FactorError::Other(format!("{e:?}")))?;
         Ok(Symbolic { inner, n })
     }
 
     /// Numeric factorisation of the leading `n` columns with these values.
-    pub fn factorise(&self, col_ptr: &[usize], row_idx: &[usize], values: &[f64]) -> Result<Cholesky, FactorError> {
+    pub fn factorise(
+        &self,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        values: &[f64],
+    ) -> Result<Cholesky, FactorError> {
         let n = self.n;
         let a = SparseColMatRef::new(sym(n, col_ptr, row_idx), &values[..col_ptr[n]]);
-        let llt = Llt::try_new_with_symbolic(self.inner.clone(), a, Side::Upper).map_err(|e| match e {
-            faer::sparse::linalg::LltError::Numeric(x) => FactorError::NotPositiveDefinite(format!("{x:?}")),
-            other => FactorError::Other(format!("{other:?}")),
-        })?;
+        let llt =
+            Llt::try_new_with_symbolic(self.inner.clone(), a, Side::Upper).map_err(
+                |e| match e {
+                    faer::sparse::linalg::LltError::Numeric(x) => {
+                        FactorError::NotPositiveDefinite(format!("{x:?}"))
+                    }
+                    other => FactorError::Other(format!("{other:?}")),
+                },
+            )?;
         Ok(Cholesky { llt, n })
     }
 }

@@ -26,7 +26,10 @@ pub fn inverse_map(xe: &[[f64; 2]; 6], x: [f64; 2], tol: f64) -> Option<[f64; 2]
             return None;
         }
         let res = [x[0] - mp.x[0], x[1] - mp.x[1]];
-        let dr = [(j[1][1] * res[0] - j[0][1] * res[1]) / det, (-j[1][0] * res[0] + j[0][0] * res[1]) / det];
+        let dr = [
+            (j[1][1] * res[0] - j[0][1] * res[1]) / det,
+            (-j[1][0] * res[0] + j[0][0] * res[1]) / det,
+        ];
         r = [r[0] + dr[0], r[1] + dr[1]];
         if dr[0].abs() + dr[1].abs() < 1e-13 {
             break;
@@ -36,7 +39,11 @@ pub fn inverse_map(xe: &[[f64; 2]; 6], x: [f64; 2], tol: f64) -> Option<[f64; 2]
 }
 
 /// The element of `elems` containing `x` and the reference coordinates there.
-pub fn locate(mesh: &Mesh, elems: &[(usize, Material)], x: [f64; 2]) -> Option<(usize, Material, [f64; 2])> {
+pub fn locate(
+    mesh: &Mesh,
+    elems: &[(usize, Material)],
+    x: [f64; 2],
+) -> Option<(usize, Material, [f64; 2])> {
     elems.iter().find_map(|(e, mat)| {
         let xe = mesh.tri_coords(*e);
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
@@ -55,7 +62,13 @@ pub fn locate(mesh: &Mesh, elems: &[(usize, Material)], x: [f64; 2]) -> Option<(
 }
 
 /// Stress (σxx, σyy, σxy, σzz) at point `x`, evaluated inside its element (no averaging).
-pub fn stress_at(mesh: &Mesh, elems: &[(usize, Material)], dofs: &DofMap, u: &[f64], x: [f64; 2]) -> Option<[f64; 4]> {
+pub fn stress_at(
+    mesh: &Mesh,
+    elems: &[(usize, Material)],
+    dofs: &DofMap,
+    u: &[f64],
+    x: [f64; 2],
+) -> Option<[f64; 4]> {
     let (e, mat, r) = locate(mesh, elems, x)?;
     let nodes = &mesh.triangles[e].nodes;
     let ue: [f64; 12] = std::array::from_fn(|i| dofs.displacement(nodes[i / 2], u)[i % 2]);

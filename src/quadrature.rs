@@ -46,7 +46,10 @@ pub const TRI_7: [TriPoint; 7] = [
 /// Gauss–Legendre points and weights on [−1, 1] with `n` points, n = 1..=5.
 pub fn gauss_legendre(n: usize) -> &'static [(f64, f64)] {
     const G1: [(f64, f64); 1] = [(0.0, 2.0)];
-    const G2: [(f64, f64); 2] = [(-0.577_350_269_189_625_8, 1.0), (0.577_350_269_189_625_8, 1.0)];
+    const G2: [(f64, f64); 2] = [
+        (-0.577_350_269_189_625_8, 1.0),
+        (0.577_350_269_189_625_8, 1.0),
+    ];
     const G3: [(f64, f64); 3] = [
         (-0.774_596_669_241_483_4, 5.0 / 9.0),
         (0.0, 8.0 / 9.0),
@@ -87,7 +90,10 @@ mod tests {
     fn check(rule: &[TriPoint], degree: i32) {
         for p in 0..=degree {
             for q in 0..=(degree - p) {
-                let s: f64 = rule.iter().map(|(x, w)| w * x[0].powi(p) * x[1].powi(q)).sum();
+                let s: f64 = rule
+                    .iter()
+                    .map(|(x, w)| w * x[0].powi(p) * x[1].powi(q))
+                    .sum();
                 assert!((s - exact(p, q)).abs() < 1e-14, "p={p} q={q}");
             }
         }
@@ -105,7 +111,11 @@ mod tests {
         for n in 1..=5 {
             for k in 0..(2 * n as i32) {
                 let s: f64 = gauss_legendre(n).iter().map(|(x, w)| w * x.powi(k)).sum();
-                let e = if k % 2 == 1 { 0.0 } else { 2.0 / (k as f64 + 1.0) };
+                let e = if k % 2 == 1 {
+                    0.0
+                } else {
+                    2.0 / (k as f64 + 1.0)
+                };
                 assert!((s - e).abs() < 1e-14, "n={n} k={k}");
             }
         }

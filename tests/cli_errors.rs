@@ -7,7 +7,10 @@ use std::path::PathBuf;
 use std::process::Command;
 
 fn stickslip(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_stickslip")).args(args).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args(args)
+        .output()
+        .unwrap();
     (
         out.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&out.stdout).into(),
@@ -19,7 +22,11 @@ fn stickslip(args: &[&str]) -> (i32, String, String) {
 fn square_msh() -> String {
     let (nodes, tris, sides) = structured(2, 2, 0.0, 1.0, 0.0, 1.0, 0.0);
     let [b, r, t, l] = sides;
-    msh41(&nodes, &[("body", tris)], &[("bottom", b), ("right", r), ("top", t), ("left", l)])
+    msh41(
+        &nodes,
+        &[("body", tris)],
+        &[("bottom", b), ("right", r), ("top", t), ("left", l)],
+    )
 }
 
 const GOOD_CASE: &str = r#"{
@@ -37,7 +44,13 @@ fn run_case(name: &str, case: &str, mesh: &str) -> (i32, String, bool) {
     std::fs::write(dir.join("case.json"), case).unwrap();
     std::fs::write(dir.join("mesh.msh"), mesh).unwrap();
     let out = dir.join("out");
-    let (code, _, err) = stickslip(&["run", dir.join("case.json").to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"]);
+    let (code, _, err) = stickslip(&[
+        "run",
+        dir.join("case.json").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
     (code, err, out.exists())
 }
 
@@ -45,7 +58,10 @@ fn assert_refused(name: &str, case: &str, mesh: &str, needles: &[&str]) {
     let (code, err, wrote) = run_case(name, case, mesh);
     assert_eq!(code, 2, "{name}: exit status (stderr: {err})");
     for n in needles {
-        assert!(err.contains(n), "{name}: message should contain `{n}`, got: {err}");
+        assert!(
+            err.contains(n),
+            "{name}: message should contain `{n}`, got: {err}"
+        );
     }
     assert!(!wrote, "{name}: output was written");
 }
@@ -59,49 +75,141 @@ fn good_case_runs_and_writes_everything() {
     std::fs::write(dir.join("case.json"), GOOD_CASE).unwrap();
     std::fs::write(dir.join("mesh.msh"), square_msh()).unwrap();
     let out = dir.join("o");
-    let (code, _, _) = stickslip(&["run", dir.join("case.json").to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet", "--threads", "1"]);
+    let (code, _, _) = stickslip(&[
+        "run",
+        dir.join("case.json").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--threads",
+        "1",
+    ]);
     assert_eq!(code, 0);
-    for f in ["case.pvd", "case_0001.vtu", "case_0002.vtu", "summary.json", "history.csv"] {
+    for f in [
+        "case.pvd",
+        "case_0001.vtu",
+        "case_0002.vtu",
+        "summary.json",
+        "history.csv",
+    ] {
         assert!(out.join(f).exists(), "{f} missing");
     }
     // No temporary files are left behind.
-    let leftovers: Vec<PathBuf> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().path()).filter(|p| p.to_string_lossy().contains(".tmp")).collect();
+    let leftovers: Vec<PathBuf> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.to_string_lossy().contains(".tmp"))
+        .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
 
 #[test]
 fn unknown_key_is_named_with_its_line() {
     let case = GOOD_CASE.replace("\"steps\": 2", "\"steps\": 2, \"stpes\": 3");
-    assert_refused("unknown-key", &case, &square_msh(), &["case.json", "unknown field `stpes`", "line 6"]);
+    assert_refused(
+        "unknown-key",
+        &case,
+        &square_msh(),
+        &["case.json", "unknown field `stpes`", "line 6"],
+    );
 }
 
 #[test]
 fn out_of_range_values_name_the_key() {
     let msh = square_msh();
-    assert_refused("nu", &GOOD_CASE.replace("\"nu\": 0.3", "\"nu\": 0.5"), &msh, &["bodies[0].nu", "0.5"]);
-    assert_refused("E", &GOOD_CASE.replace("\"E\": 1.0", "\"E\": -2.0"), &msh, &["bodies[0].E", "-2"]);
-    assert_refused("steps", &GOOD_CASE.replace("\"steps\": 2", "\"steps\": 0"), &msh, &["stages[0].steps"]);
-    assert_refused("huge", &GOOD_CASE.replace("\"ty\": -1.0", "\"ty\": -1e400"), &msh, &["case.json", "line 5"]);
-    assert_refused("hertz-a", &GOOD_CASE.replace("\"kind\": \"uniform\", \"ty\": -1.0", "\"kind\": \"hertz\", \"p0\": 1.0, \"a\": 0.0"), &msh, &["tractions[0].a"]);
-    assert_refused("pilot-missing", &GOOD_CASE.replace("\"steps\": 2,", "\"steps\": 2, \"pilot_x\": {\"force\": 1.0},"), &msh, &["stages[0].pilot_x", "no `pilot`"]);
+    assert_refused(
+        "nu",
+        &GOOD_CASE.replace("\"nu\": 0.3", "\"nu\": 0.5"),
+        &msh,
+        &["bodies[0].nu", "0.5"],
+    );
+    assert_refused(
+        "E",
+        &GOOD_CASE.replace("\"E\": 1.0", "\"E\": -2.0"),
+        &msh,
+        &["bodies[0].E", "-2"],
+    );
+    assert_refused(
+        "steps",
+        &GOOD_CASE.replace("\"steps\": 2", "\"steps\": 0"),
+        &msh,
+        &["stages[0].steps"],
+    );
+    assert_refused(
+        "huge",
+        &GOOD_CASE.replace("\"ty\": -1.0", "\"ty\": -1e400"),
+        &msh,
+        &["case.json", "line 5"],
+    );
+    assert_refused(
+        "hertz-a",
+        &GOOD_CASE.replace(
+            "\"kind\": \"uniform\", \"ty\": -1.0",
+            "\"kind\": \"hertz\", \"p0\": 1.0, \"a\": 0.0",
+        ),
+        &msh,
+        &["tractions[0].a"],
+    );
+    assert_refused(
+        "pilot-missing",
+        &GOOD_CASE.replace(
+            "\"steps\": 2,",
+            "\"steps\": 2, \"pilot_x\": {\"force\": 1.0},",
+        ),
+        &msh,
+        &["stages[0].pilot_x", "no `pilot`"],
+    );
 }
 
 #[test]
 fn missing_and_empty_groups_are_named() {
     let msh = square_msh();
-    assert_refused("missing", &GOOD_CASE.replace("\"group\": \"body\"", "\"group\": \"lower_body\""), &msh, &["mesh.msh", "`lower_body` is not in the mesh", "its groups: bottom, right, top, left, body"]);
+    assert_refused(
+        "missing",
+        &GOOD_CASE.replace("\"group\": \"body\"", "\"group\": \"lower_body\""),
+        &msh,
+        &[
+            "mesh.msh",
+            "`lower_body` is not in the mesh",
+            "its groups: bottom, right, top, left, body",
+        ],
+    );
     // A name declared in $PhysicalNames but with no elements.
-    let empty = msh.replacen("$PhysicalNames\n5\n", "$PhysicalNames\n6\n1 77 \"ghost\"\n", 1);
-    assert_refused("empty", &GOOD_CASE.replace("\"group\": \"top\"", "\"group\": \"ghost\""), &empty, &["`ghost` is empty"]);
-    assert_refused("wrongdim", &GOOD_CASE.replace("\"group\": \"bottom\"", "\"group\": \"body\""), &msh, &["`body` is a surface"]);
+    let empty = msh.replacen(
+        "$PhysicalNames\n5\n",
+        "$PhysicalNames\n6\n1 77 \"ghost\"\n",
+        1,
+    );
+    assert_refused(
+        "empty",
+        &GOOD_CASE.replace("\"group\": \"top\"", "\"group\": \"ghost\""),
+        &empty,
+        &["`ghost` is empty"],
+    );
+    assert_refused(
+        "wrongdim",
+        &GOOD_CASE.replace("\"group\": \"bottom\"", "\"group\": \"body\""),
+        &msh,
+        &["`body` is a surface"],
+    );
 }
 
 #[test]
 fn old_and_first_order_meshes_say_how_to_fix_them() {
     let msh22 = std::fs::read_to_string(repo().join("meshes/vm272_L0_msh22.msh")).unwrap();
-    assert_refused("msh22", GOOD_CASE, &msh22, &["MSH format 2.2", "re-export it as MSH 4.1", "-format msh41"]);
+    assert_refused(
+        "msh22",
+        GOOD_CASE,
+        &msh22,
+        &["MSH format 2.2", "re-export it as MSH 4.1", "-format msh41"],
+    );
     let lin = std::fs::read_to_string(repo().join("meshes/vm272_first_order.msh")).unwrap();
-    assert_refused("first-order", GOOD_CASE, &lin, &["first-order mesh", "Mesh.ElementOrder = 2"]);
+    assert_refused(
+        "first-order",
+        GOOD_CASE,
+        &lin,
+        &["first-order mesh", "Mesh.ElementOrder = 2"],
+    );
 }
 
 #[test]
@@ -113,14 +221,19 @@ fn corrupt_and_truncated_meshes_are_refused() {
     let dir = tempdir("nofile");
     let (code, _, err) = stickslip(&["run", dir.join("nope.json").to_str().unwrap()]);
     assert_eq!(code, 2);
-    assert!(err.contains("nope.json") && err.contains("cannot read"), "{err}");
+    assert!(
+        err.contains("nope.json") && err.contains("cannot read"),
+        "{err}"
+    );
 }
 
 #[test]
 fn bodies_sharing_nodes_are_refused() {
     // Two squares side by side that share their common edge's nodes.
     let (nodes, tris, _) = structured(2, 1, 0.0, 2.0, 0.0, 1.0, 0.0);
-    let (left, right): (Vec<_>, Vec<_>) = tris.into_iter().partition(|t| nodes[t[0]][0] < 1.0 - 1e-9 && nodes[t[1]][0] < 1.0 + 1e-9 && nodes[t[2]][0] < 1.0 + 1e-9);
+    let (left, right): (Vec<_>, Vec<_>) = tris.into_iter().partition(|t| {
+        nodes[t[0]][0] < 1.0 - 1e-9 && nodes[t[1]][0] < 1.0 + 1e-9 && nodes[t[2]][0] < 1.0 + 1e-9
+    });
     let msh = msh41(&nodes, &[("a", left), ("b", right)], &[]);
     let case = r#"{"mesh": "mesh.msh", "bodies": [{"group": "a", "E": 1, "nu": 0.3}, {"group": "b", "E": 1, "nu": 0.3}], "stages": [{"steps": 1}]}"#;
     assert_refused("shared", case, &msh, &["bodies `a` and `b` share node"]);
@@ -133,7 +246,11 @@ fn badly_curved_elements_are_named_and_clockwise_ones_are_reoriented() {
     let mut cw = tris.clone();
     cw[0] = stickslip::shapes::tri6::REVERSE.map(|k| cw[0][k]);
     let [b, r, t, l] = sides.clone();
-    let msh = msh41(&nodes, &[("body", cw)], &[("bottom", b), ("right", r), ("top", t), ("left", l)]);
+    let msh = msh41(
+        &nodes,
+        &[("body", cw)],
+        &[("bottom", b), ("right", r), ("top", t), ("left", l)],
+    );
     let (code, err, _) = run_case("cw", GOOD_CASE, &msh);
     assert_eq!(code, 0, "{err}");
     let dir = tempdir("cw-info");
@@ -145,8 +262,17 @@ fn badly_curved_elements_are_named_and_clockwise_ones_are_reoriented() {
     let m = tris[0][4];
     nodes[m] = [nodes[m][0] - 0.45, nodes[m][1] + 0.45];
     let [b, r, t, l] = sides;
-    let msh = msh41(&nodes, &[("body", tris)], &[("bottom", b), ("right", r), ("top", t), ("left", l)]);
-    assert_refused("jacobian", GOOD_CASE, &msh, &["element 9", "Jacobian is not positive"]);
+    let msh = msh41(
+        &nodes,
+        &[("body", tris)],
+        &[("bottom", b), ("right", r), ("top", t), ("left", l)],
+    );
+    assert_refused(
+        "jacobian",
+        GOOD_CASE,
+        &msh,
+        &["element 9", "Jacobian is not positive"],
+    );
 }
 
 #[test]
@@ -165,26 +291,48 @@ fn unsupported_element_types_are_named() {
     let bad = out.join("\n") + "\n";
     let (code, err, wrote) = run_case("lin2", GOOD_CASE, &bad);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("gmsh type 1") && err.contains("element "), "{err}");
+    assert!(
+        err.contains("gmsh type 1") && err.contains("element "),
+        "{err}"
+    );
     assert!(!wrote);
 }
 
 #[test]
 fn support_on_the_pilot_face_is_refused() {
-    let case = GOOD_CASE.replace("\"stages\"", "\"pilot\": {\"group\": \"bottom\"},\n  \"stages\"");
-    assert_refused("pilot-support", &case, &square_msh(), &["both supported (group `bottom`)", "rigid pilot face"]);
+    let case = GOOD_CASE.replace(
+        "\"stages\"",
+        "\"pilot\": {\"group\": \"bottom\"},\n  \"stages\"",
+    );
+    assert_refused(
+        "pilot-support",
+        &case,
+        &square_msh(),
+        &["both supported (group `bottom`)", "rigid pilot face"],
+    );
 }
 
 #[test]
 fn load_on_a_body_not_in_use_is_refused() {
     let (nodes, tris, sides) = structured(2, 1, 0.0, 2.0, 0.0, 1.0, 0.0);
-    let (left, right): (Vec<_>, Vec<_>) = tris.into_iter().partition(|t| nodes[t[0]][0] < 1.0 - 1e-9 && nodes[t[1]][0] < 1.0 + 1e-9 && nodes[t[2]][0] < 1.0 + 1e-9);
+    let (left, right): (Vec<_>, Vec<_>) = tris.into_iter().partition(|t| {
+        nodes[t[0]][0] < 1.0 - 1e-9 && nodes[t[1]][0] < 1.0 + 1e-9 && nodes[t[2]][0] < 1.0 + 1e-9
+    });
     let [b, r, t, l] = sides;
-    let msh = msh41(&nodes, &[("a", left), ("b", right)], &[("bottom", b), ("right", r), ("top", t), ("left", l)]);
+    let msh = msh41(
+        &nodes,
+        &[("a", left), ("b", right)],
+        &[("bottom", b), ("right", r), ("top", t), ("left", l)],
+    );
     let case = r#"{"mesh": "mesh.msh", "bodies": [{"group": "a", "E": 1, "nu": 0.3}],
       "supports": [{"group": "left", "ux": 0, "uy": 0}],
       "tractions": [{"group": "right", "kind": "uniform", "tx": 1}], "stages": [{"steps": 1, "traction_scale": 1}]}"#;
-    assert_refused("dangling", case, &msh, &["group `right` is not an edge of any triangle"]);
+    assert_refused(
+        "dangling",
+        case,
+        &msh,
+        &["group `right` is not an edge of any triangle"],
+    );
 }
 
 #[test]
@@ -194,5 +342,8 @@ fn an_unheld_pilot_under_force_control_fails_cleanly() {
       "pilot": {"group": "top"}, "stages": [{"steps": 1, "pilot_y": {"force": -1.0}}]}"#;
     let (code, err, _) = run_case("unheld", case, &square_msh());
     assert_eq!(code, 3, "{err}");
-    assert!(err.contains("not held") || err.contains("not positive definite"), "{err}");
+    assert!(
+        err.contains("not held") || err.contains("not positive definite"),
+        "{err}"
+    );
 }

@@ -9,11 +9,11 @@
 
 mod common;
 use common::*;
+use std::f64::consts::PI;
 use stickslip::case::Case;
 use stickslip::elasticity::Material;
 use stickslip::mesh::gmsh;
 use stickslip::model::Model;
-use std::f64::consts::PI;
 
 #[test]
 fn patch_test_on_distorted_curved_mesh_is_exact() {
@@ -45,11 +45,30 @@ fn patch_test_on_distorted_curved_mesh_is_exact() {
             moved[m] = true;
         }
     }
-    assert!(moved.iter().filter(|m| **m).count() > 10, "the patch has interior edges to curve");
+    assert!(
+        moved.iter().filter(|m| **m).count() > 10,
+        "the patch has interior edges to curve"
+    );
     stickslip::mesh::check::check(&mesh, &["body"], &[]).expect("curved patch is still valid");
     let mat = Material { e: 70.0, nu: 0.33 };
-    let lin = |x: [f64; 2]| [1e-3 + 2e-3 * x[0] - 1e-3 * x[1], -5e-4 + 4e-4 * x[0] + 3e-3 * x[1]];
-    let (dofs, u) = solve_linear(&mesh, mat, &|n| if boundary[n] { lin(mesh.nodes[n]).map(Some) } else { [None; 2] }, None);
+    let lin = |x: [f64; 2]| {
+        [
+            1e-3 + 2e-3 * x[0] - 1e-3 * x[1],
+            -5e-4 + 4e-4 * x[0] + 3e-3 * x[1],
+        ]
+    };
+    let (dofs, u) = solve_linear(
+        &mesh,
+        mat,
+        &|n| {
+            if boundary[n] {
+                lin(mesh.nodes[n]).map(Some)
+            } else {
+                [None; 2]
+            }
+        },
+        None,
+    );
     let mut max_err: f64 = 0.0;
     for n in 0..mesh.nodes.len() {
         let (uh, ue) = (dofs.displacement(n, &u), lin(mesh.nodes[n]));
@@ -62,7 +81,10 @@ fn patch_test_on_distorted_curved_mesh_is_exact() {
         let ue: [f64; 12] = std::array::from_fn(|i| dofs.displacement(t.nodes[i / 2], &u)[i % 2]);
         for s in stickslip::elasticity::nodal_stress(&mesh.tri_coords(e), &ue, &mat) {
             for i in 0..3 {
-                assert!((s[i] - exact[i]).abs() < 1e-12 * exact[1].abs(), "element {e}: {s:?} vs {exact:?}");
+                assert!(
+                    (s[i] - exact[i]).abs() < 1e-12 * exact[1].abs(),
+                    "element {e}: {s:?} vs {exact:?}"
+                );
             }
         }
     }
@@ -79,7 +101,12 @@ fn manufactured_solution_converges_at_rates_3_and_2() {
         [s, s]
     };
     let strain = |x: [f64; 2]| {
-        let (sx, cx, sy, cy) = ((PI * x[0]).sin(), (PI * x[0]).cos(), (PI * x[1]).sin(), (PI * x[1]).cos());
+        let (sx, cx, sy, cy) = (
+            (PI * x[0]).sin(),
+            (PI * x[0]).cos(),
+            (PI * x[1]).sin(),
+            (PI * x[1]).cos(),
+        );
         let (dx, dy) = (PI * cx * sy, PI * sx * cy);
         [dx, dy, dy + dx]
     };
@@ -93,8 +120,24 @@ fn manufactured_solution_converges_at_rates_3_and_2() {
     for n in [4, 8, 16, 32] {
         let (nodes, tris, _) = structured(n, n, 0.0, 1.0, 0.0, 1.0, 0.25);
         let mesh = mesh_from(nodes, tris);
-        let on_boundary = |x: [f64; 2]| x[0].abs() < 1e-12 || x[1].abs() < 1e-12 || (x[0] - 1.0).abs() < 1e-12 || (x[1] - 1.0).abs() < 1e-12;
-        let (dofs, u) = solve_linear(&mesh, mat, &|k| if on_boundary(mesh.nodes[k]) { [Some(0.0); 2] } else { [None; 2] }, Some(&body));
+        let on_boundary = |x: [f64; 2]| {
+            x[0].abs() < 1e-12
+                || x[1].abs() < 1e-12
+                || (x[0] - 1.0).abs() < 1e-12
+                || (x[1] - 1.0).abs() < 1e-12
+        };
+        let (dofs, u) = solve_linear(
+            &mesh,
+            mat,
+            &|k| {
+                if on_boundary(mesh.nodes[k]) {
+                    [Some(0.0); 2]
+                } else {
+                    [None; 2]
+                }
+            },
+            Some(&body),
+        );
         let (a, b) = error_norms(&mesh, &mat, &dofs, &u, &exact, &strain);
         hs.push(1.0 / n as f64);
         e2.push(a);
@@ -121,7 +164,11 @@ fn lame_errors(prefix: &str) -> (Vec<f64>, Vec<f64>) {
         let r = x[0].hypot(x[1]);
         let (cs, sn) = (x[0] / r, x[1] / r);
         let (err, ett) = (dur(r), ur(r) / r);
-        [err * cs * cs + ett * sn * sn, err * sn * sn + ett * cs * cs, 2.0 * (err - ett) * sn * cs]
+        [
+            err * cs * cs + ett * sn * sn,
+            err * sn * sn + ett * cs * cs,
+            2.0 * (err - ett) * sn * cs,
+        ]
     };
     let mat = Material { e, nu };
     let (mut hs, mut errs) = (vec![], vec![]);
@@ -137,10 +184,18 @@ fn lame_errors(prefix: &str) -> (Vec<f64>, Vec<f64>) {
         let case: Case = serde_json::from_str(&json).unwrap();
         case.validate("lame").unwrap();
         let model = Model::build(&case, &mesh_path).unwrap();
-        let (u, _) = model.solve_step(1.0, [stickslip::case::Control::Force(0.0); 2]).unwrap();
+        let (u, _) = model
+            .solve_step(1.0, [stickslip::case::Control::Force(0.0); 2])
+            .unwrap();
         let (l2, _) = error_norms(&model.mesh, &mat, &model.dofs, &u, &exact, &strain);
         let info = stickslip::mesh::info::info(&model.mesh);
-        hs.push(info.groups.iter().find(|g| g.name == "inner").unwrap().h_max);
+        hs.push(
+            info.groups
+                .iter()
+                .find(|g| g.name == "inner")
+                .unwrap()
+                .h_max,
+        );
         errs.push(l2);
     }
     (hs, errs)
@@ -153,6 +208,12 @@ fn lame_cylinder_curved_edges_keep_the_full_rate() {
     let (rc, rs) = (fitted_rate(&h, &err), fitted_rate(&hs, &errs));
     println!("Lamé L2 errors: curved {err:?} (rate {rc:.3}); straight {errs:?} (rate {rs:.3})");
     assert!(rc >= 2.8, "curved-edge rate {rc}");
-    assert!(rs < 2.4 && rs > 1.6, "straight-edged rate {rs} should fall to about 2");
-    assert!(errs[4] > 10.0 * err[4], "straight edges must be markedly worse on the finest mesh");
+    assert!(
+        rs < 2.4 && rs > 1.6,
+        "straight-edged rate {rs} should fall to about 2"
+    );
+    assert!(
+        errs[4] > 10.0 * err[4],
+        "straight edges must be markedly worse on the finest mesh"
+    );
 }

@@ -30,7 +30,9 @@ fn axis_stresses(case_json: &str, mesh: &std::path::Path, y_top: f64) -> Vec<(f6
     let mut out = Vec::new();
     for k in 0..=60 {
         let z = 3.0 * A * k as f64 / 60.0;
-        let s = model.stress_at([0.0, y_top - z], &u).expect("axis point inside the body");
+        let s = model
+            .stress_at([0.0, y_top - z], &u)
+            .expect("axis point inside the body");
         out.push((z, s[0], s[1]));
     }
     out
@@ -50,23 +52,53 @@ fn hertz_traction_on_a_large_block_matches_mcewen_within_1_percent() {
     let flamant = move |x: [f64; 2], n: [f64; 2]| {
         let r2 = x[0] * x[0] + x[1] * x[1];
         let srr = 2.0 * p * x[1] / (std::f64::consts::PI * r2); // y < 0 below the load
-        let (sxx, syy, sxy) = (srr * x[0] * x[0] / r2, srr * x[1] * x[1] / r2, srr * x[0] * x[1] / r2);
+        let (sxx, syy, sxy) = (
+            srr * x[0] * x[0] / r2,
+            srr * x[1] * x[1] / r2,
+            srr * x[0] * x[1] / r2,
+        );
         [sxx * n[0] + sxy * n[1], sxy * n[0] + syy * n[1]]
     };
     let hertz = |x: [f64; 2], n: [f64; 2]| {
         let r = x[0] / A;
-        let pr = if r.abs() < 1.0 { P0 * (1.0 - r * r).sqrt() } else { 0.0 };
+        let pr = if r.abs() < 1.0 {
+            P0 * (1.0 - r * r).sqrt()
+        } else {
+            0.0
+        };
         [-pr * n[0], -pr * n[1]]
     };
     let bottom = mesh.group_nodes(mesh.group("bottom").unwrap());
-    let ymin = bottom.iter().map(|&n| mesh.nodes[n][1]).fold(f64::INFINITY, f64::min);
-    let centre = *bottom.iter().min_by(|&&a, &&b| mesh.nodes[a][0].abs().partial_cmp(&mesh.nodes[b][0].abs()).unwrap()).unwrap();
-    let corner = *bottom.iter().max_by(|&&a, &&b| mesh.nodes[a][0].partial_cmp(&mesh.nodes[b][0]).unwrap()).unwrap();
+    let ymin = bottom
+        .iter()
+        .map(|&n| mesh.nodes[n][1])
+        .fold(f64::INFINITY, f64::min);
+    let centre = *bottom
+        .iter()
+        .min_by(|&&a, &&b| {
+            mesh.nodes[a][0]
+                .abs()
+                .partial_cmp(&mesh.nodes[b][0].abs())
+                .unwrap()
+        })
+        .unwrap();
+    let corner = *bottom
+        .iter()
+        .max_by(|&&a, &&b| mesh.nodes[a][0].partial_cmp(&mesh.nodes[b][0]).unwrap())
+        .unwrap();
     assert!(mesh.nodes[centre][0].abs() < 1e-9 && (mesh.nodes[centre][1] - ymin).abs() < 1e-9);
     let (dofs, u) = solve_linear_with(
         &mesh,
         mat,
-        &|n| if n == centre { [Some(0.0); 2] } else if n == corner { [None, Some(0.0)] } else { [None; 2] },
+        &|n| {
+            if n == centre {
+                [Some(0.0); 2]
+            } else if n == corner {
+                [None, Some(0.0)]
+            } else {
+                [None; 2]
+            }
+        },
         None,
         &|d, f| {
             add_edge_traction(&mesh, "top", d, f, &hertz);
@@ -93,10 +125,22 @@ fn hertz_traction_on_a_large_block_matches_mcewen_within_1_percent() {
             tau_max = (tau, z);
         }
     }
-    println!("max |σ − σ_McEwen|/p0 on the axis, z ≤ 3a: {worst:.4}; τ_max = {:.4} p0 at z = {:.3} a", tau_max.0 / P0, tau_max.1 / A);
+    println!(
+        "max |σ − σ_McEwen|/p0 on the axis, z ≤ 3a: {worst:.4}; τ_max = {:.4} p0 at z = {:.3} a",
+        tau_max.0 / P0,
+        tau_max.1 / A
+    );
     assert!(worst < 0.01, "axis stresses deviate by {worst:.4} p0");
-    assert!((tau_max.0 / P0 - 0.300).abs() < 0.005, "τ_max = {} p0", tau_max.0 / P0);
-    assert!((tau_max.1 / A - 0.78).abs() < 0.06, "depth of τ_max = {} a", tau_max.1 / A);
+    assert!(
+        (tau_max.0 / P0 - 0.300).abs() < 0.005,
+        "τ_max = {} p0",
+        tau_max.0 / P0
+    );
+    assert!(
+        (tau_max.1 / A - 0.78).abs() < 0.06,
+        "depth of τ_max = {} a",
+        tau_max.1 / A
+    );
 }
 
 /// The same load on the arc of the lower half-cylinder (R = 8 mm = 11.75a): the finite body

@@ -21,7 +21,14 @@ fn binary_and_ascii_files_of_one_mesh_agree() {
         assert_eq!(s.nodes, t.nodes);
     }
     let names: Vec<&str> = a.groups.iter().map(|g| g.name.as_str()).collect();
-    for n in ["lower_body", "upper_body", "bottom", "top", "lower_arc", "upper_arc"] {
+    for n in [
+        "lower_body",
+        "upper_body",
+        "bottom",
+        "top",
+        "lower_arc",
+        "upper_arc",
+    ] {
         assert!(names.contains(&n), "{n} missing from {names:?}");
     }
 }
@@ -29,7 +36,12 @@ fn binary_and_ascii_files_of_one_mesh_agree() {
 /// Arc chord lengths of the elements within |x| ≤ 1.5a of the contact point.
 fn arc_h(level: usize) -> (f64, f64, usize) {
     let m = gmsh::read(&repo().join(format!("meshes/vm272_L{level}.msh"))).unwrap();
-    check::check(&m, &["lower_body", "upper_body"], &["bottom", "top", "lower_arc", "upper_arc"]).unwrap();
+    check::check(
+        &m,
+        &["lower_body", "upper_body"],
+        &["bottom", "top", "lower_arc", "upper_arc"],
+    )
+    .unwrap();
     let g = m.group("lower_arc").unwrap();
     let hs: Vec<f64> = g
         .elements
@@ -38,7 +50,11 @@ fn arc_h(level: usize) -> (f64, f64, usize) {
         .filter(|x| x[0][0].abs() <= 1.5 * A + 1e-9 && x[1][0].abs() <= 1.5 * A + 1e-9)
         .map(|x| (x[0][0] - x[1][0]).hypot(x[0][1] - x[1][1]))
         .collect();
-    (hs.iter().cloned().fold(0.0, f64::max), hs.iter().cloned().fold(f64::INFINITY, f64::min), m.triangles.len())
+    (
+        hs.iter().cloned().fold(0.0, f64::max),
+        hs.iter().cloned().fold(f64::INFINITY, f64::min),
+        m.triangles.len(),
+    )
 }
 
 #[test]
@@ -49,8 +65,16 @@ fn vm272_ladder_halves_the_arc_size_and_reaches_the_papers_resolution() {
         assert!((ratio - 2.0).abs() < 0.1, "arc size ratio {ratio}");
     }
     let finest = levels[5];
-    assert!(finest.0 <= A / 100.0, "finest arc size {} > a/100", finest.0);
-    assert!((40_000..=50_000).contains(&finest.2), "finest has {} triangles", finest.2);
+    assert!(
+        finest.0 <= A / 100.0,
+        "finest arc size {} > a/100",
+        finest.0
+    );
+    assert!(
+        (40_000..=50_000).contains(&finest.2),
+        "finest has {} triangles",
+        finest.2
+    );
 }
 
 #[test]

@@ -9,30 +9,55 @@ use vtkio::model::{Attribute, DataSet, IOBuffer};
 fn vtu_holds_every_documented_array_with_finite_values() {
     let dir = common::tempdir("vtu");
     let status = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args(["run", repo().join("cases/arc_hertz.json").to_str().unwrap(), "--out", dir.to_str().unwrap(), "--quiet"])
+        .args([
+            "run",
+            repo().join("cases/arc_hertz.json").to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+            "--quiet",
+        ])
         .status()
         .unwrap();
     assert!(status.success());
     let pvd = std::fs::read_to_string(dir.join("arc_hertz.pvd")).unwrap();
     assert!(pvd.contains("file=\"arc_hertz_0001.vtu\""));
     let vtk = vtkio::Vtk::import(dir.join("arc_hertz_0001.vtu")).unwrap();
-    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else { panic!("not an unstructured grid") };
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+        panic!("not an unstructured grid")
+    };
     let piece = pieces[0].load_piece_data(None).unwrap();
     let npts = piece.num_points();
-    let expect = [("displacement", 3), ("stress_xx", 1), ("stress_yy", 1), ("stress_xy", 1), ("stress_zz", 1), ("von_mises", 1)];
+    let expect = [
+        ("displacement", 3),
+        ("stress_xx", 1),
+        ("stress_yy", 1),
+        ("stress_xy", 1),
+        ("stress_zz", 1),
+        ("von_mises", 1),
+    ];
     for (name, ncomp) in expect {
         let arr = piece.data.point.iter().find_map(|a| match a {
             Attribute::DataArray(d) if d.name == name => Some(d),
             _ => None,
         });
         let arr = arr.unwrap_or_else(|| panic!("{name} missing"));
-        let IOBuffer::F64(v) = &arr.data else { panic!("{name} not f64") };
+        let IOBuffer::F64(v) = &arr.data else {
+            panic!("{name} not f64")
+        };
         assert_eq!(v.len(), npts * ncomp, "{name}");
-        assert!(v.iter().all(|x| x.is_finite()), "{name} has non-finite values");
+        assert!(
+            v.iter().all(|x| x.is_finite()),
+            "{name} has non-finite values"
+        );
     }
-    let body = piece.data.cell.iter().any(|a| matches!(a, Attribute::DataArray(d) if d.name == "body_id"));
+    let body = piece
+        .data
+        .cell
+        .iter()
+        .any(|a| matches!(a, Attribute::DataArray(d) if d.name == "body_id"));
     assert!(body, "body_id missing");
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "completed");
     for k in ["read", "assemble", "factorise", "solve", "write"] {
         assert!(summary["timings_s"][k].as_f64().unwrap() >= 0.0, "{k}");

@@ -11,7 +11,15 @@ use stickslip::model::Model;
 fn block_model(dir: &std::path::Path) -> Model {
     let (nodes, tris, sides) = structured(6, 4, -1.5, 1.5, 0.0, 2.0, 0.2);
     let [b, r, t, l] = sides;
-    std::fs::write(dir.join("m.msh"), msh41(&nodes, &[("body", tris)], &[("bottom", b), ("right", r), ("top", t), ("left", l)])).unwrap();
+    std::fs::write(
+        dir.join("m.msh"),
+        msh41(
+            &nodes,
+            &[("body", tris)],
+            &[("bottom", b), ("right", r), ("top", t), ("left", l)],
+        ),
+    )
+    .unwrap();
     let json = r#"{"mesh": "m.msh", "bodies": [{"group": "body", "E": 200, "nu": 0.3}],
       "supports": [{"group": "bottom", "ux": 0, "uy": 0}], "pilot": {"group": "top"},
       "stages": [{"steps": 1}]}"#;
@@ -24,7 +32,12 @@ fn pilot_matches_a_dirichlet_solve_of_the_same_rigid_motion() {
     let dir = tempdir("pilot-dirichlet");
     let model = block_model(&dir);
     let d = [0.013, -0.021];
-    let (u, p) = model.solve_step(0.0, [Control::Displacement(d[0]), Control::Displacement(d[1])]).unwrap();
+    let (u, p) = model
+        .solve_step(
+            0.0,
+            [Control::Displacement(d[0]), Control::Displacement(d[1])],
+        )
+        .unwrap();
     let p = p.unwrap();
     assert_eq!([p.ux, p.uy], d);
     // Independent: prescribe d on every top node by elimination.
@@ -32,9 +45,20 @@ fn pilot_matches_a_dirichlet_solve_of_the_same_rigid_motion() {
     let top = mesh.group_nodes(mesh.group("top").unwrap());
     let bottom = mesh.group_nodes(mesh.group("bottom").unwrap());
     let mat = Material { e: 200.0, nu: 0.3 };
-    let (dofs, v) = solve_linear(mesh, mat, &|n| {
-        if top.contains(&n) { [Some(d[0]), Some(d[1])] } else if bottom.contains(&n) { [Some(0.0); 2] } else { [None; 2] }
-    }, None);
+    let (dofs, v) = solve_linear(
+        mesh,
+        mat,
+        &|n| {
+            if top.contains(&n) {
+                [Some(d[0]), Some(d[1])]
+            } else if bottom.contains(&n) {
+                [Some(0.0); 2]
+            } else {
+                [None; 2]
+            }
+        },
+        None,
+    );
     let mut worst: f64 = 0.0;
     for n in 0..mesh.nodes.len() {
         let (a, b) = (model.dofs.displacement(n, &u), dofs.displacement(n, &v));
@@ -52,14 +76,29 @@ fn force_and_displacement_control_agree() {
     let dir = tempdir("pilot-control");
     let model = block_model(&dir);
     let f = [1.7, -10.0];
-    let (_, p) = model.solve_step(0.0, [Control::Force(f[0]), Control::Force(f[1])]).unwrap();
+    let (_, p) = model
+        .solve_step(0.0, [Control::Force(f[0]), Control::Force(f[1])])
+        .unwrap();
     let p = p.unwrap();
     assert!((p.fx - f[0]).abs() < 1e-12 && (p.fy - f[1]).abs() < 1e-12);
-    let (_, q) = model.solve_step(0.0, [Control::Displacement(p.ux), Control::Displacement(p.uy)]).unwrap();
+    let (_, q) = model
+        .solve_step(
+            0.0,
+            [Control::Displacement(p.ux), Control::Displacement(p.uy)],
+        )
+        .unwrap();
     let q = q.unwrap();
-    assert!((q.fx - f[0]).abs() < 1e-9 * f[1].abs() && (q.fy - f[1]).abs() < 1e-9 * f[1].abs(), "{q:?}");
+    assert!(
+        (q.fx - f[0]).abs() < 1e-9 * f[1].abs() && (q.fy - f[1]).abs() < 1e-9 * f[1].abs(),
+        "{q:?}"
+    );
     // Mixed: force in y, displacement in x.
-    let (_, m) = model.solve_step(0.0, [Control::Displacement(p.ux), Control::Force(f[1])]).unwrap();
+    let (_, m) = model
+        .solve_step(0.0, [Control::Displacement(p.ux), Control::Force(f[1])])
+        .unwrap();
     let m = m.unwrap();
-    assert!((m.fx - f[0]).abs() < 1e-9 * f[1].abs() && (m.uy - p.uy).abs() < 1e-9 * p.uy.abs(), "{m:?}");
+    assert!(
+        (m.fx - f[0]).abs() < 1e-9 * f[1].abs() && (m.uy - p.uy).abs() < 1e-9 * p.uy.abs(),
+        "{m:?}"
+    );
 }

@@ -29,7 +29,11 @@ pub enum MeshCheckError {
         "{path}: element {tag} is curved so much that its Jacobian is not positive at every \
          quadrature point (min det J = {min_det:.3e}); move its mid-edge nodes or refine there"
     )]
-    BadJacobian { path: String, tag: u64, min_det: f64 },
+    BadJacobian {
+        path: String,
+        tag: u64,
+        min_det: f64,
+    },
     #[error(
         "{path}: bodies `{a}` and `{b}` share node {node} (and {more} more); each body must be \
          meshed on its own so that contact can separate them"
@@ -42,14 +46,22 @@ pub enum MeshCheckError {
         more: usize,
     },
     #[error("{path}: boundary element {tag} in group `{group}` has zero length")]
-    ZeroLengthEdge { path: String, tag: u64, group: String },
+    ZeroLengthEdge {
+        path: String,
+        tag: u64,
+        group: String,
+    },
     #[error("{path}: node {node} has a coordinate that is not a finite number")]
     NonFiniteNode { path: String, node: u64 },
     #[error(
         "{path}: boundary element {tag} in group `{group}` is not an edge of any triangle of the \
          bodies in use"
     )]
-    DanglingEdge { path: String, tag: u64, group: String },
+    DanglingEdge {
+        path: String,
+        tag: u64,
+        group: String,
+    },
 }
 
 /// What the checks found that is not an error.
@@ -65,16 +77,18 @@ fn path(mesh: &Mesh) -> String {
 
 /// Checks that a group exists, is not empty and has the expected dimension.
 pub fn require_group(mesh: &Mesh, name: &str, dim: GroupDim) -> Result<(), MeshCheckError> {
-    let g = mesh.group(name).ok_or_else(|| MeshCheckError::MissingGroup {
-        path: path(mesh),
-        name: name.into(),
-        available: mesh
-            .groups
-            .iter()
-            .map(|g| g.name.as_str())
-            .collect::<Vec<_>>()
-            .join(", "),
-    })?;
+    let g = mesh
+        .group(name)
+        .ok_or_else(|| MeshCheckError::MissingGroup {
+            path: path(mesh),
+            name: name.into(),
+            available: mesh
+                .groups
+                .iter()
+                .map(|g| g.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+        })?;
     let label = |d: GroupDim| match d {
         GroupDim::Curve => "curve",
         GroupDim::Surface => "surface",
@@ -104,7 +118,11 @@ pub fn require_group(mesh: &Mesh, name: &str, dim: GroupDim) -> Result<(), MeshC
 ///   triangle is positive at the vertices, the mid-edge nodes and the 6 quadrature points;
 /// * no two bodies share a node;
 /// * every boundary line has non-zero length.
-pub fn check(mesh: &Mesh, bodies: &[&str], boundaries: &[&str]) -> Result<CheckReport, MeshCheckError> {
+pub fn check(
+    mesh: &Mesh,
+    bodies: &[&str],
+    boundaries: &[&str],
+) -> Result<CheckReport, MeshCheckError> {
     for b in bodies {
         require_group(mesh, b, GroupDim::Surface)?;
     }
@@ -191,5 +209,7 @@ pub fn check(mesh: &Mesh, bodies: &[&str], boundaries: &[&str]) -> Result<CheckR
 fn shared_nodes(mesh: &Mesh, a: &str, b: &str) -> Vec<usize> {
     let na = mesh.group_nodes(mesh.group(a).expect("exists"));
     let nb = mesh.group_nodes(mesh.group(b).expect("exists"));
-    na.into_iter().filter(|n| nb.binary_search(n).is_ok()).collect()
+    na.into_iter()
+        .filter(|n| nb.binary_search(n).is_ok())
+        .collect()
 }

@@ -80,11 +80,12 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
         path: p.clone(),
         what: "$Nodes section",
     })?;
-    let file_tags = node_tags_in_file_order(bytes, msh.header.file_type != 0, msh.header.size_t_size)
-        .ok_or_else(|| MeshReadError::Parse {
-            path: p.clone(),
-            detail: "cannot read the node tags of the $Nodes section".into(),
-        })?;
+    let file_tags =
+        node_tags_in_file_order(bytes, msh.header.file_type != 0, msh.header.size_t_size)
+            .ok_or_else(|| MeshReadError::Parse {
+                path: p.clone(),
+                detail: "cannot read the node tags of the $Nodes section".into(),
+            })?;
     let mut nodes = Vec::new();
     let mut node_tags = Vec::new();
     let mut index_of: HashMap<u64, usize> = HashMap::new();
@@ -175,20 +176,21 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
         let mut local = Vec::with_capacity(block.elements.len());
         for el in &block.elements {
             let idx = |t: u64| {
-                index_of
-                    .get(&t)
-                    .copied()
-                    .ok_or(MeshReadError::MissingNode {
-                        path: p.clone(),
-                        tag: el.element_tag,
-                        node: t,
-                    })
+                index_of.get(&t).copied().ok_or(MeshReadError::MissingNode {
+                    path: p.clone(),
+                    tag: el.element_tag,
+                    node: t,
+                })
             };
             if kind == 9 {
                 if el.nodes.len() != 6 {
                     return Err(MeshReadError::Parse {
                         path: p,
-                        detail: format!("element {} has {} nodes, 6 expected", el.element_tag, el.nodes.len()),
+                        detail: format!(
+                            "element {} has {} nodes, 6 expected",
+                            el.element_tag,
+                            el.nodes.len()
+                        ),
                     });
                 }
                 let mut n = [0usize; 6];
@@ -204,7 +206,11 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
                 if el.nodes.len() != 3 {
                     return Err(MeshReadError::Parse {
                         path: p,
-                        detail: format!("element {} has {} nodes, 3 expected", el.element_tag, el.nodes.len()),
+                        detail: format!(
+                            "element {} has {} nodes, 3 expected",
+                            el.element_tag,
+                            el.nodes.len()
+                        ),
                     });
                 }
                 let mut n = [0usize; 3];
@@ -221,13 +227,20 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
         for ph in phys {
             let key = (dim, ph.abs());
             let gi = *group_index.entry(key).or_insert_with(|| {
-                let name = names
-                    .get(&key)
-                    .cloned()
-                    .unwrap_or_else(|| format!("{}{}", if dim == 2 { "surface_" } else { "curve_" }, ph.abs()));
+                let name = names.get(&key).cloned().unwrap_or_else(|| {
+                    format!(
+                        "{}{}",
+                        if dim == 2 { "surface_" } else { "curve_" },
+                        ph.abs()
+                    )
+                });
                 mesh.groups.push(Group {
                     name,
-                    dim: if dim == 2 { GroupDim::Surface } else { GroupDim::Curve },
+                    dim: if dim == 2 {
+                        GroupDim::Surface
+                    } else {
+                        GroupDim::Curve
+                    },
                     tag: ph.abs(),
                     elements: Vec::new(),
                 });
@@ -242,7 +255,11 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
         if (dim == 1 || dim == 2) && !group_index.contains_key(&(dim, tag)) {
             mesh.groups.push(Group {
                 name: name.clone(),
-                dim: if dim == 2 { GroupDim::Surface } else { GroupDim::Curve },
+                dim: if dim == 2 {
+                    GroupDim::Surface
+                } else {
+                    GroupDim::Curve
+                },
                 tag,
                 elements: Vec::new(),
             });
@@ -297,7 +314,9 @@ fn physical_names(bytes: &[u8], path: &str) -> Result<HashMap<(i32, i32), String
         .parse()
         .map_err(|_| bad(ln, format!("`{}` is not a count", count.trim())))?;
     for _ in 0..count {
-        let (ln, l) = lines.next().ok_or_else(|| bad(ln, "fewer names than the count says".into()))?;
+        let (ln, l) = lines
+            .next()
+            .ok_or_else(|| bad(ln, "fewer names than the count says".into()))?;
         let mut it = l.trim().splitn(3, char::is_whitespace);
         let dim: i32 = it
             .next()

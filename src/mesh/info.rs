@@ -65,7 +65,10 @@ pub fn info(mesh: &Mesh) -> MeshInfo {
                     for &e in &g.elements {
                         let xe = mesh.tri_coords(e);
                         let l = [dist(xe[1], xe[2]), dist(xe[2], xe[0]), dist(xe[0], xe[1])];
-                        let (lo, hi) = (l.iter().cloned().fold(f64::INFINITY, f64::min), l.iter().cloned().fold(0.0, f64::max));
+                        let (lo, hi) = (
+                            l.iter().cloned().fold(f64::INFINITY, f64::min),
+                            l.iter().cloned().fold(0.0, f64::max),
+                        );
                         hmin = hmin.min(lo);
                         hmax = hmax.max(hi);
                         // Angles by the law of cosines.

@@ -86,7 +86,11 @@ impl Mesh {
                 .iter()
                 .flat_map(|&e| self.triangles[e].nodes)
                 .collect(),
-            GroupDim::Curve => g.elements.iter().flat_map(|&l| self.lines[l].nodes).collect(),
+            GroupDim::Curve => g
+                .elements
+                .iter()
+                .flat_map(|&l| self.lines[l].nodes)
+                .collect(),
         };
         v.sort_unstable();
         v.dedup();

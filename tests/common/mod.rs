@@ -2,6 +2,7 @@
 //! linear solve with per-node Dirichlet values, and error norms.
 #![allow(dead_code)]
 
+use std::path::PathBuf;
 use stickslip::assembly::{self, UpperCsc};
 use stickslip::condense::Condensed;
 use stickslip::dofs::{DofMap, SupportSpec};
@@ -10,7 +11,6 @@ use stickslip::linsolve::Symbolic;
 use stickslip::mesh::{Group, GroupDim, Mesh, Tri6};
 use stickslip::quadrature::TRI_7;
 use stickslip::shapes::tri6;
-use std::path::PathBuf;
 
 pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -26,7 +26,11 @@ pub fn tempdir(name: &str) -> PathBuf {
 
 /// Writes an ASCII MSH 4.1 file: `surfaces` are (name, 6-node triangles), `curves` are
 /// (name, 3-node lines); node indices are 0-based into `nodes` (written as tags 1..).
-pub fn msh41(nodes: &[[f64; 2]], surfaces: &[(&str, Vec<[usize; 6]>)], curves: &[(&str, Vec<[usize; 3]>)]) -> String {
+pub fn msh41(
+    nodes: &[[f64; 2]],
+    surfaces: &[(&str, Vec<[usize; 6]>)],
+    curves: &[(&str, Vec<[usize; 3]>)],
+) -> String {
     let mut s = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n");
     s += &format!("{}\n", surfaces.len() + curves.len());
     for (i, (n, _)) in curves.iter().enumerate() {
@@ -44,7 +48,12 @@ pub fn msh41(nodes: &[[f64; 2]], surfaces: &[(&str, Vec<[usize; 6]>)], curves: &
         s += &format!("{} 0 0 0 1 1 0 1 {} 0\n", i + 1, 100 + i);
     }
     s += "$EndEntities\n$Nodes\n";
-    s += &format!("1 {} 1 {}\n2 1 0 {}\n", nodes.len(), nodes.len(), nodes.len());
+    s += &format!(
+        "1 {} 1 {}\n2 1 0 {}\n",
+        nodes.len(),
+        nodes.len(),
+        nodes.len()
+    );
     for i in 0..nodes.len() {
         s += &format!("{}\n", i + 1);
     }
@@ -52,7 +61,8 @@ pub fn msh41(nodes: &[[f64; 2]], surfaces: &[(&str, Vec<[usize; 6]>)], curves: &
         s += &format!("{:.17e} {:.17e} 0\n", p[0], p[1]);
     }
     s += "$EndNodes\n$Elements\n";
-    let ne: usize = surfaces.iter().map(|x| x.1.len()).sum::<usize>() + curves.iter().map(|x| x.1.len()).sum::<usize>();
+    let ne: usize = surfaces.iter().map(|x| x.1.len()).sum::<usize>()
+        + curves.iter().map(|x| x.1.len()).sum::<usize>();
     s += &format!("{} {} 1 {}\n", curves.len() + surfaces.len(), ne, ne);
     let mut tag = 1;
     for (i, (_, ls)) in curves.iter().enumerate() {
@@ -81,7 +91,15 @@ pub fn msh41(nodes: &[[f64; 2]], surfaces: &[(&str, Vec<[usize; 6]>)], curves: &
 /// triangles; interior vertices moved by `distort` (fraction of the cell size, deterministic
 /// pseudo-random). Returns nodes, triangles and the boundary lines of the four sides
 /// (bottom, right, top, left).
-pub fn structured(nx: usize, ny: usize, x0: f64, x1: f64, y0: f64, y1: f64, distort: f64) -> (Vec<[f64; 2]>, Vec<[usize; 6]>, [Vec<[usize; 3]>; 4]) {
+pub fn structured(
+    nx: usize,
+    ny: usize,
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+    distort: f64,
+) -> (Vec<[f64; 2]>, Vec<[usize; 6]>, [Vec<[usize; 3]>; 4]) {
     // Grid of (2nx+1) × (2ny+1) points; even indices are vertices.
     let (mx, my) = (2 * nx + 1, 2 * ny + 1);
     let id = |i: usize, j: usize| j * mx + i;
@@ -95,7 +113,9 @@ pub fn structured(nx: usize, ny: usize, x0: f64, x1: f64, y0: f64, y1: f64, dist
     // Move interior vertices, then put mid-edge nodes back at straight midpoints.
     let mut seed = 12345u64;
     let mut rnd = || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((seed >> 33) as f64 / (1u64 << 31) as f64) - 0.5
     };
     for j in (2..my - 1).step_by(2) {
@@ -119,10 +139,30 @@ pub fn structured(nx: usize, ny: usize, x0: f64, x1: f64, y0: f64, y1: f64, dist
             nodes[t[ed[2]]] = mid(nodes[t[ed[0]]], nodes[t[ed[1]]]);
         }
     }
-    let bottom = (0..nx).map(|c| [id(2 * c, 0), id(2 * c + 2, 0), id(2 * c + 1, 0)]).collect();
-    let right = (0..ny).map(|c| [id(mx - 1, 2 * c), id(mx - 1, 2 * c + 2), id(mx - 1, 2 * c + 1)]).collect();
-    let top = (0..nx).map(|c| [id(2 * c + 2, my - 1), id(2 * c, my - 1), id(2 * c + 1, my - 1)]).collect();
-    let left = (0..ny).map(|c| [id(0, 2 * c + 2), id(0, 2 * c), id(0, 2 * c + 1)]).collect();
+    let bottom = (0..nx)
+        .map(|c| [id(2 * c, 0), id(2 * c + 2, 0), id(2 * c + 1, 0)])
+        .collect();
+    let right = (0..ny)
+        .map(|c| {
+            [
+                id(mx - 1, 2 * c),
+                id(mx - 1, 2 * c + 2),
+                id(mx - 1, 2 * c + 1),
+            ]
+        })
+        .collect();
+    let top = (0..nx)
+        .map(|c| {
+            [
+                id(2 * c + 2, my - 1),
+                id(2 * c, my - 1),
+                id(2 * c + 1, my - 1),
+            ]
+        })
+        .collect();
+    let left = (0..ny)
+        .map(|c| [id(0, 2 * c + 2), id(0, 2 * c), id(0, 2 * c + 1)])
+        .collect();
     (nodes, tris, [bottom, right, top, left])
 }
 
@@ -133,9 +173,21 @@ pub fn mesh_from(nodes: Vec<[f64; 2]>, tris: Vec<[usize; 6]>) -> Mesh {
         source: "generated".into(),
         node_tags: (1..=nodes.len() as u64).collect(),
         nodes,
-        triangles: tris.into_iter().enumerate().map(|(i, t)| Tri6 { nodes: t, tag: i as u64 + 1 }).collect(),
+        triangles: tris
+            .into_iter()
+            .enumerate()
+            .map(|(i, t)| Tri6 {
+                nodes: t,
+                tag: i as u64 + 1,
+            })
+            .collect(),
         lines: vec![],
-        groups: vec![Group { name: "body".into(), dim: GroupDim::Surface, tag: 1, elements: (0..n).collect() }],
+        groups: vec![Group {
+            name: "body".into(),
+            dim: GroupDim::Surface,
+            tag: 1,
+            elements: (0..n).collect(),
+        }],
         reoriented: vec![],
     }
 }
@@ -170,7 +222,11 @@ pub fn solve_linear_with(
     let supports: Vec<SupportSpec> = fixed
         .iter()
         .zip(&single)
-        .map(|((_, u), nodes)| SupportSpec { group: "dirichlet", nodes, value: *u })
+        .map(|((_, u), nodes)| SupportSpec {
+            group: "dirichlet",
+            nodes,
+            value: *u,
+        })
         .collect();
     let dofs = DofMap::build(&mesh.node_tags, &active, &supports, None, &[]).unwrap();
     let mut k = UpperCsc::pattern(mesh, &elems, &dofs);
@@ -235,7 +291,13 @@ pub fn fitted_rate(h: &[f64], err: &[f64]) -> f64 {
 
 /// Adds the consistent nodal forces of a traction field `t(x, n)` (n: outward unit normal) on
 /// the lines of a curve group, 5-point Gauss per edge.
-pub fn add_edge_traction(mesh: &Mesh, group: &str, dofs: &DofMap, f: &mut [f64], t: &dyn Fn([f64; 2], [f64; 2]) -> [f64; 2]) {
+pub fn add_edge_traction(
+    mesh: &Mesh,
+    group: &str,
+    dofs: &DofMap,
+    f: &mut [f64],
+    t: &dyn Fn([f64; 2], [f64; 2]) -> [f64; 2],
+) {
     use stickslip::shapes::lin3;
     let tris: Vec<usize> = (0..mesh.triangles.len()).collect();
     let orient = stickslip::loads::EdgeOrientation::new(mesh, &tris);
