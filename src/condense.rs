@@ -1,130 +1,133 @@
 //! Static condensation onto the retained DOFs.
 //!
-//! With the free DOFs split into interior `I` and retained `B`,
+//! With the free DOFs split into interior `I` and retained `R` (numbered last),
 //! ```text
-//!   [K_II K_IB] [u_I]   [f_I]
-//!   [K_BI K_BB] [u_B] = [f_B + r_B]
+//!   [K_II K_IR] [u_I]   [f_I]
+//!   [K_RI K_RR] [u_R] = [f_R + r_R]
 //! ```
-//! where `r_B` are the forces the retained DOFs receive from outside the elastic bodies
-//! (the pilot force, contact forces). Eliminating `u_I = K_II⁻¹ (f_I − K_IB u_B)` gives
+//! where `r_R` are the forces the retained DOFs receive from outside the elastic bodies (the
+//! pilot force, contact forces). Eliminating `u_I` gives the condensed system
 //! ```text
-//!   S u_B = g + r_B,   S = K_BB − K_BI K_II⁻¹ K_IB,   g = f_B − K_BI K_II⁻¹ f_I .
+//!   S u_R = g + r_R,   S = K_RR − K_RI K_II⁻¹ K_IR,   g = f_R − K_RI K_II⁻¹ f_I .
 //! ```
-//! `S` is dense and small; it is built once per model from `n_B` interior solves, done in
-//! blocks of columns so that memory stays `O(n_I × block)`.
+//! `S` comes out of one sparse Cholesky factorisation that orders `R` last
+//! ([`PartialCholesky`]): `S = L_RR L_RRᵀ`.
+//!
+//! A body held only through retained DOFs (the upper half-cylinder hangs on the pilot) makes
+//! `K` singular. The listed *grounded* DOFs get a spring `k_g` to ground in the factorised
+//! matrix `K̂ = K + k_g E Eᵀ`; since `Ŝ = S + k_g E Eᵀ` exactly, the spring is taken back out of
+//! every equation (it appears as the force `k_g u` the spring would carry).
 
 use crate::assembly::UpperCsc;
-use crate::linsolve::Cholesky;
-use rayon::prelude::*;
+use crate::linsolve::{FactorError, PartialCholesky, PartialSymbolic};
 
-/// The condensed (Schur complement) system on the retained DOFs.
+/// The condensed system on the retained DOFs.
 pub struct Condensed {
     pub n_i: usize,
-    pub n_b: usize,
-    /// `S`, dense, row-major `n_b × n_b`.
-    pub s: Vec<f64>,
-    /// `K_IB` by retained column: (interior row, value).
-    k_ib: Vec<Vec<(usize, f64)>>,
-    /// Largest diagonal entry of `K_BB` before condensation: the scale against which a
+    pub n_r: usize,
+    /// Factorisation of `K̂` with the retained DOFs last.
+    pub chol: PartialCholesky,
+    /// Grounding springs: (retained index, stiffness `k_g`).
+    pub grounding: Vec<(usize, f64)>,
+    /// Largest diagonal entry of `K_RR` before condensation: the scale against which a
     /// vanishing pivot of `S` (a retained DOF that nothing holds) is judged.
-    pub kbb_scale: f64,
+    pub krr_scale: f64,
 }
 
-/// Columns solved per block when building `S`.
-const BLOCK: usize = 64;
-
 impl Condensed {
-    /// Builds `S` from the assembled free stiffness `k` and the factorised interior block.
-    pub fn build(k: &UpperCsc, n_i: usize, chol: &Cholesky) -> Condensed {
-        let n_b = k.n - n_i;
-        let mut k_ib = vec![Vec::new(); n_b];
-        let mut s = vec![0.0; n_b * n_b];
-        for c in n_i..k.n {
-            for p in k.col_ptr[c]..k.col_ptr[c + 1] {
-                let (r, v) = (k.row_idx[p], k.values[p]);
-                if r < n_i {
-                    k_ib[c - n_i].push((r, v));
-                } else {
-                    let (i, j) = (r - n_i, c - n_i);
-                    s[i * n_b + j] = v;
-                    s[j * n_b + i] = v;
-                }
-            }
+    /// Factorises `K̂` (the assembled free stiffness `k` with springs on the `grounded`
+    /// retained DOFs, given by retained index) with the symbolic analysis `symbolic`.
+    pub fn build(
+        k: &UpperCsc,
+        n_i: usize,
+        grounded: &[usize],
+        symbolic: &PartialSymbolic,
+    ) -> Result<Condensed, FactorError> {
+        let n_r = k.n - n_i;
+        let mut values = k.values.clone();
+        let diag = |c: usize| k.position(c, c);
+        let krr_scale = (n_i..k.n)
+            .map(|c| k.values[diag(c)].abs())
+            .fold(0.0, f64::max);
+        let mut grounding = Vec::new();
+        for &r in grounded {
+            let p = diag(n_i + r);
+            let kg = k.values[p].abs().max(f64::MIN_POSITIVE);
+            values[p] += kg;
+            grounding.push((r, kg));
         }
-        let kbb_scale = (0..n_b).map(|i| s[i * n_b + i].abs()).fold(0.0, f64::max);
-        for start in (0..n_b).step_by(BLOCK) {
-            let cols = BLOCK.min(n_b - start);
-            let mut x = vec![0.0; n_i * cols];
-            for j in 0..cols {
-                for &(r, v) in &k_ib[start + j] {
-                    x[j * n_i + r] = v;
-                }
-            }
-            chol.solve_block_in_place(&mut x, cols);
-            // S[i, start + j] −= K_IB[:, i] · X[:, j]
-            let upd: Vec<(usize, usize, f64)> = (0..n_b)
-                .into_par_iter()
-                .flat_map_iter(|i| {
-                    let x = &x;
-                    let col = &k_ib[i];
-                    (0..cols).map(move |j| {
-                        let d: f64 = col.iter().map(|&(r, v)| v * x[j * n_i + r]).sum();
-                        (i, start + j, d)
-                    })
-                })
-                .collect();
-            for (i, j, d) in upd {
-                s[i * n_b + j] -= d;
-            }
-        }
-        // Symmetrise round-off.
-        for i in 0..n_b {
-            for j in 0..i {
-                let m = 0.5 * (s[i * n_b + j] + s[j * n_b + i]);
-                s[i * n_b + j] = m;
-                s[j * n_b + i] = m;
-            }
-        }
-        Condensed {
+        let chol = symbolic.factorise(&k.col_ptr, &k.row_idx, &values)?;
+        Ok(Condensed {
             n_i,
-            n_b,
-            s,
-            k_ib,
-            kbb_scale,
+            n_r,
+            chol,
+            grounding,
+            krr_scale,
+        })
+    }
+
+    /// `Ŝ x` for a retained vector `x` (with the grounding springs).
+    pub fn s_hat_mul(&self, x: &[f64]) -> Vec<f64> {
+        let l = self.chol.l_rr();
+        let n = self.n_r;
+        // y = Lᵀ x, then L y.
+        let mut y = vec![0.0; n];
+        for j in 0..n {
+            let mut s = 0.0;
+            for i in j..n {
+                s += l[(i, j)] * x[i];
+            }
+            y[j] = s;
         }
-    }
-
-    /// `g = f_B − K_BI K_II⁻¹ f_I`, and `x_f = K_II⁻¹ f_I` for later recovery.
-    pub fn reduce(&self, f: &[f64], chol: &Cholesky) -> (Vec<f64>, Vec<f64>) {
-        let mut xf = f[..self.n_i].to_vec();
-        chol.solve_in_place(&mut xf);
-        let g = (0..self.n_b)
-            .map(|i| f[self.n_i + i] - self.k_ib[i].iter().map(|&(r, v)| v * xf[r]).sum::<f64>())
-            .collect();
-        (g, xf)
-    }
-
-    /// The full free solution from the retained values: `u_I = K_II⁻¹ (f_I − K_IB u_B)`.
-    pub fn recover(&self, f: &[f64], u_b: &[f64], chol: &Cholesky) -> Vec<f64> {
-        let mut u = f[..self.n_i].to_vec();
-        for (i, col) in self.k_ib.iter().enumerate() {
-            for &(r, v) in col {
-                u[r] -= v * u_b[i];
+        let mut z = vec![0.0; n];
+        for j in 0..n {
+            for i in j..n {
+                z[i] += l[(i, j)] * y[j];
             }
         }
-        chol.solve_in_place(&mut u);
-        u.extend_from_slice(u_b);
-        u
+        z
     }
 
-    /// `S u_B` (the forces the retained DOFs need, less `g`).
-    pub fn s_mul(&self, u_b: &[f64]) -> Vec<f64> {
-        (0..self.n_b)
-            .map(|i| {
-                (0..self.n_b)
-                    .map(|j| self.s[i * self.n_b + j] * u_b[j])
-                    .sum()
-            })
-            .collect()
+    /// `S` as a dense row-major matrix (grounding removed).
+    pub fn s_dense(&self) -> Vec<f64> {
+        let n = self.n_r;
+        let l = self.chol.l_rr();
+        let mut s = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..=i {
+                let v: f64 = (0..=j).map(|k| l[(i, k)] * l[(j, k)]).sum();
+                s[i * n + j] = v;
+                s[j * n + i] = v;
+            }
+        }
+        for &(r, kg) in &self.grounding {
+            s[r * n + r] -= kg;
+        }
+        s
+    }
+
+    /// The condensed load `g = f_R − K_RI K_II⁻¹ f_I` of a free load vector `f`.
+    pub fn reduce(&self, f: &[f64]) -> Vec<f64> {
+        let mut x = f.to_vec();
+        self.chol.solve_in_place(&mut x);
+        self.s_hat_mul(&x[self.n_i..])
+    }
+
+    /// The full free solution for loads `f` and forces `r_R` on the retained DOFs, given the
+    /// retained displacements `u_R` they produce (needed to take the grounding back out):
+    /// `u = K̂⁻¹ (f + [0; r_R + k_g E Eᵀ u_R])`.
+    pub fn recover(&self, f: &[f64], r_r: &[f64], u_r: &[f64]) -> Vec<f64> {
+        debug_assert_eq!(u_r.len(), self.n_r);
+        let mut x = f.to_vec();
+        for (i, r) in r_r.iter().enumerate() {
+            x[self.n_i + i] += r;
+        }
+        for &(r, kg) in &self.grounding {
+            x[self.n_i + r] += kg * u_r[r];
+        }
+        self.chol.solve_in_place(&mut x);
+        // The retained part reproduces u_R to round-off; keep the exact values.
+        x[self.n_i..].copy_from_slice(u_r);
+        x
     }
 }

@@ -6,7 +6,7 @@ use crate::case::{Case, TractionKind};
 use crate::condense::Condensed;
 use crate::dofs::{DofMap, SupportSpec};
 use crate::elasticity::{self, Material};
-use crate::linsolve::{Cholesky, Symbolic};
+use crate::linsolve::PartialSymbolic;
 use crate::loads::{EdgeOrientation, Traction};
 use crate::mesh::{GroupDim, Mesh, check};
 use std::time::Instant;
@@ -57,8 +57,9 @@ pub struct Model {
     pub elem_body: Vec<usize>,
     pub dofs: DofMap,
     pub k: UpperCsc,
-    pub chol: Cholesky,
-    pub symbolic: Symbolic,
+    /// Symbolic analysis of the stiffness (ordering with the retained DOFs last).
+    pub symbolic: PartialSymbolic,
+    /// Factorised stiffness and condensed system on the retained DOFs.
     pub condensed: Condensed,
     /// Nodal forces of the tractions at scale 1 (free DOFs).
     pub f_traction: Vec<f64>,
@@ -192,14 +193,17 @@ impl Model {
         timings.assemble = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
-        let symbolic = Symbolic::analyse(dofs.n_interior, &k.col_ptr, &k.row_idx)?;
+        let symbolic =
+            PartialSymbolic::analyse(dofs.n_free(), dofs.n_retained, &k.col_ptr, &k.row_idx)?;
         timings.analyse = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let chol = symbolic.factorise(&k.col_ptr, &k.row_idx, &k.values)?;
+        // The pilot's DOFs are grounded: the body it drives may be held by nothing else.
+        let grounded: Vec<usize> = dofs
+            .pilot
+            .map(|p| p.iter().map(|d| d - dofs.n_interior).collect())
+            .unwrap_or_default();
+        let condensed = Condensed::build(&k, dofs.n_interior, &grounded, &symbolic)?;
         timings.factorise = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let condensed = Condensed::build(&k, dofs.n_interior, &chol);
-        timings.condense = t.elapsed().as_secs_f64();
         let _ = GroupDim::Curve;
         Ok(Model {
             mesh,
@@ -207,7 +211,6 @@ impl Model {
             elem_body,
             dofs,
             k,
-            chol,
             symbolic,
             condensed,
             f_traction,

@@ -104,22 +104,20 @@ impl Model {
             .map(|(a, b)| scale * a + b)
             .collect();
         let cond = &self.condensed;
-        let (g, _) = cond.reduce(&f, &self.chol);
-        let (u_b, pilot) = if self.dofs.pilot.is_some() {
-            let (u, r) = solve_pilot(&cond.s, &g, control, cond.kbb_scale)?;
-            (
-                u.to_vec(),
-                Some(PilotState {
-                    ux: u[0],
-                    uy: u[1],
-                    fx: r[0],
-                    fy: r[1],
-                }),
-            )
-        } else {
-            (Vec::new(), None)
-        };
-        Ok((cond.recover(&f, &u_b, &self.chol), pilot))
+        if self.dofs.pilot.is_none() {
+            return Ok((cond.recover(&f, &[], &[]), None));
+        }
+        let g = cond.reduce(&f);
+        let (u, r) = solve_pilot(&cond.s_dense(), &g, control, cond.krr_scale)?;
+        Ok((
+            cond.recover(&f, &r, &u),
+            Some(PilotState {
+                ux: u[0],
+                uy: u[1],
+                fx: r[0],
+                fy: r[1],
+            }),
+        ))
     }
 }
 
