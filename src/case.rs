@@ -29,6 +29,9 @@ pub struct Case {
     /// Distributed loads on curve groups, scaled by each stage's `traction_scale`.
     #[serde(default)]
     pub tractions: Vec<TractionSpec>,
+    /// Contact between two curve groups (frictionless unless `friction` is given).
+    #[serde(default)]
+    pub contact: Option<ContactSpec>,
     /// Load stages, applied in order; each ramps linearly from the end of the previous one.
     pub stages: Vec<Stage>,
     /// What to write.
@@ -67,6 +70,42 @@ pub struct Support {
 #[serde(deny_unknown_fields)]
 pub struct Pilot {
     pub group: String,
+}
+
+/// A contact pair.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// Curve group carrying the multipliers (the mortar side).
+    pub slave: String,
+    /// Curve group it is projected onto.
+    pub master: String,
+    /// `newton` (semi-smooth Newton / primal–dual active set, default), `penalty` or
+    /// `augmented_lagrangian`.
+    #[serde(default = "default_method")]
+    pub method: crate::contact::solver::Method,
+    /// Penalty factor κ: stiffness `κ E* w_j / h_j` per node (penalty and augmented
+    /// Lagrangian; default 100).
+    #[serde(default)]
+    pub penalty: Option<f64>,
+    /// Friction law of the accumulated slip; absent = frictionless.
+    #[serde(default)]
+    pub friction: Option<crate::friction::FrictionLaw>,
+    /// Slave edges with an initial gap up to this value are contact candidates (default
+    /// 0.5 % of the slave face's bounding-box diagonal; doubled automatically if the contact
+    /// reaches the edge of the zone).
+    #[serde(default)]
+    pub candidate_gap: Option<f64>,
+    /// Newton iterations per step before the step is cut back (default 60).
+    #[serde(default)]
+    pub max_iterations: Option<usize>,
+    /// Relative tolerance of the contact iteration (default 1e-10).
+    #[serde(default)]
+    pub tolerance: Option<f64>,
+}
+
+fn default_method() -> crate::contact::solver::Method {
+    crate::contact::solver::Method::Newton
 }
 
 /// How one pilot component is driven at the end of a stage.
@@ -350,6 +389,23 @@ impl Case {
             }
             if let Some(v) = s.traction_scale {
                 finite(format!("stages[{i}].traction_scale"), v)?;
+            }
+        }
+        if let Some(c) = &self.contact {
+            if c.slave == c.master {
+                return Err(bad("contact.master".into(), c.master.clone(), "must differ from `contact.slave`"));
+            }
+            for (k, v) in [("penalty", c.penalty), ("candidate_gap", c.candidate_gap), ("tolerance", c.tolerance)] {
+                if let Some(v) = v {
+                    if !(v > 0.0 && v.is_finite()) {
+                        return Err(bad(format!("contact.{k}"), format!("{v}"), "must be > 0 and finite"));
+                    }
+                }
+            }
+            if let Some(n) = c.max_iterations {
+                if n == 0 || n > 10_000 {
+                    return Err(bad("contact.max_iterations".into(), format!("{n}"), "must be between 1 and 10000"));
+                }
             }
         }
         if self.output.every == 0 {

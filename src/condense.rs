@@ -130,4 +130,15 @@ impl Condensed {
         x[self.n_i..].copy_from_slice(u_r);
         x
     }
+
+    /// The full free solution for loads `f` and total forces `r_R` on the retained DOFs that
+    /// already include the grounding-spring forces: `u = K̂⁻¹ (f + [0; r_R])`.
+    pub fn recover_total(&self, f: &[f64], r_r: &[f64]) -> Vec<f64> {
+        let mut x = f.to_vec();
+        for (i, r) in r_r.iter().enumerate() {
+            x[self.n_i + i] += r;
+        }
+        self.chol.solve_in_place(&mut x);
+        x
+    }
 }

@@ -9,6 +9,7 @@ pub mod analytic;
 pub mod assembly;
 pub mod case;
 pub mod condense;
+pub mod contact;
 pub mod dofs;
 pub mod elasticity;
 pub mod friction;

@@ -99,6 +99,11 @@ impl EdgeOrientation {
         }
     }
 
+    /// The triangle that has the directed edge (a, b) of its counter-clockwise boundary.
+    pub fn edge_triangle(&self, a: usize, b: usize) -> Option<usize> {
+        self.map.get(&(a, b)).map(|v| v.0)
+    }
+
     /// Node indices of line `l` ordered with the body on the left.
     pub fn oriented_nodes(&self, mesh: &Mesh, l: usize) -> Option<[usize; 3]> {
         let n = mesh.lines[l].nodes;

@@ -30,6 +30,11 @@ pub enum ModelError {
     },
     #[error(transparent)]
     Factor(#[from] crate::linsolve::FactorError),
+    #[error("{path}: {source}")]
+    Contact {
+        path: String,
+        source: crate::contact::PairError,
+    },
     #[error("{0}")]
     Unsupported(String),
 }
@@ -67,29 +72,43 @@ pub struct Model {
     pub f_prescribed: Vec<f64>,
     /// Active nodes (used by some active triangle).
     pub active: Vec<bool>,
+    /// The contact pair on the condensed system, if the case has one.
+    pub contact: Option<crate::contact::ContactModel>,
+    /// Condensed contact loads `w0` of the tractions at scale 1 and of the prescribed
+    /// displacements.
+    pub contact_w0: [Vec<f64>; 2],
     pub timings: Timings,
 }
 
 impl Model {
     /// Reads the mesh of a case and builds the model. `case_path` resolves the mesh path.
     pub fn build(case: &Case, case_path: &std::path::Path) -> Result<Model, ModelError> {
+        Self::build_with_gap(case, case_path, None)
+    }
+
+    /// As [`Model::build`], overriding the contact candidate gap.
+    pub fn build_with_gap(case: &Case, case_path: &std::path::Path, gap: Option<f64>) -> Result<Model, ModelError> {
         let t0 = Instant::now();
         let mesh = crate::mesh::gmsh::read(&case.mesh_path(case_path))?;
         let mut timings = Timings {
             read: t0.elapsed().as_secs_f64(),
             ..Default::default()
         };
-        Self::from_mesh(case, mesh, &mut timings)
+        Self::from_mesh(case, mesh, &mut timings, gap)
     }
 
-    /// Builds the model on an already read mesh.
-    pub fn from_mesh(case: &Case, mesh: Mesh, timings: &mut Timings) -> Result<Model, ModelError> {
+    /// Builds the model on an already read mesh (`gap` overrides the contact candidate gap).
+    pub fn from_mesh(case: &Case, mesh: Mesh, timings: &mut Timings, gap: Option<f64>) -> Result<Model, ModelError> {
         let path = mesh.source.display().to_string();
         let bodies: Vec<&str> = case.bodies.iter().map(|b| b.group.as_str()).collect();
         let mut curves: Vec<&str> = case.supports.iter().map(|s| s.group.as_str()).collect();
         curves.extend(case.tractions.iter().map(|t| t.group.as_str()));
         if let Some(p) = &case.pilot {
             curves.push(&p.group);
+        }
+        if let Some(c) = &case.contact {
+            curves.push(&c.slave);
+            curves.push(&c.master);
         }
         check::check(&mesh, &bodies, &curves)?;
 
@@ -123,6 +142,41 @@ impl Model {
             }
         }
 
+        // Contact: candidate zone and mortar operator, whose nodes are retained.
+        let mut tri_body = vec![usize::MAX; mesh.triangles.len()];
+        for ((e, _), &b) in elems.iter().zip(&elem_body) {
+            tri_body[*e] = b;
+        }
+        let pair = match &case.contact {
+            None => None,
+            Some(cs) => {
+                let perr = |source| ModelError::Contact { path: path.clone(), source };
+                let slave = crate::contact::oriented_edges(&mesh, &orient, &cs.slave).map_err(perr)?;
+                let master = crate::contact::oriented_edges(&mesh, &orient, &cs.master).map_err(perr)?;
+                let g = gap.or(cs.candidate_gap).unwrap_or_else(|| crate::contact::default_candidate_gap(&mesh, &slave));
+                Some(crate::contact::build_pair(&mesh, &cs.slave, &cs.master, &slave, &master, g).map_err(perr)?)
+            }
+        };
+        let mut retained: Vec<usize> = Vec::new();
+        if let Some(p) = &pair {
+            let m = &p.mortar;
+            retained.extend(p.zone_edges.iter().flatten());
+            retained.extend(m.g_rows.iter().chain(&m.t_rows).flatten().map(|(n, _)| *n));
+            let mut seen = std::collections::HashSet::new();
+            retained.retain(|n| seen.insert(*n));
+        }
+        let e_star = pair.as_ref().map(|p| {
+            let body_of = |e: &[usize; 3]| orient.edge_triangle(e[0], e[1]).map(|t| tri_body[t]).expect("oriented edge");
+            let mb = p.mortar.master_nodes.first().and_then(|_| {
+                // The master body: the triangle adjacent to any master edge of the case group.
+                let cs = case.contact.as_ref().expect("pair implies contact");
+                crate::contact::oriented_edges(&mesh, &orient, &cs.master).ok().and_then(|v| v.first().map(body_of))
+            });
+            let sb = body_of(&p.zone_edges[0]);
+            let inv = |b: usize| (1.0 - case.bodies[b].nu.powi(2)) / case.bodies[b].e;
+            1.0 / (inv(sb) + inv(mb.unwrap_or(sb)))
+        });
+
         let support_nodes: Vec<Vec<usize>> = case
             .supports
             .iter()
@@ -150,7 +204,7 @@ impl Model {
                 .as_ref()
                 .map(|p| p.group.as_str())
                 .zip(pilot_nodes.as_deref()),
-            &[],
+            &retained,
         )
         .map_err(|source| ModelError::Dof {
             path: path.clone(),
@@ -205,6 +259,13 @@ impl Model {
         let condensed = Condensed::build(&k, dofs.n_interior, &grounded, &symbolic)?;
         timings.factorise = t.elapsed().as_secs_f64();
         let _ = GroupDim::Curve;
+        let t = Instant::now();
+        let contact = pair.map(|p| crate::contact::ContactModel::new(p, &dofs, &condensed, e_star.expect("with pair")));
+        let contact_w0 = match &contact {
+            Some(c) => [c.w0(&condensed, &condensed.reduce(&f_traction)), c.w0(&condensed, &condensed.reduce(&f_prescribed))],
+            None => [Vec::new(), Vec::new()],
+        };
+        timings.condense = t.elapsed().as_secs_f64();
         Ok(Model {
             mesh,
             elems,
@@ -216,6 +277,8 @@ impl Model {
             f_traction,
             f_prescribed,
             active,
+            contact,
+            contact_w0,
             timings: timings.clone(),
         })
     }

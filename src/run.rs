@@ -1,7 +1,8 @@
-//! The run driver: stages and load steps, the solve of each step on the condensed system,
-//! and the output of every step.
+//! The run driver: stages and load steps (with cutback), the solve of each step on the
+//! condensed system, and the output of every step.
 
 use crate::case::{Case, Control};
+use crate::contact::solver::{self, ContactError, PilotDrive, State, Status};
 use crate::model::{Model, ModelError};
 use crate::output::{self, PvdEntry, vtu};
 use serde::Serialize;
@@ -18,25 +19,17 @@ pub enum RunError {
     #[error("{0}")]
     Solve(String),
     #[error("cannot write output `{path}`: {source}")]
-    Write {
-        path: String,
-        source: std::io::Error,
-    },
+    Write { path: String, source: std::io::Error },
+    #[error("the contact reached the edge of the candidate zone (candidate gap {gap:e}) at step {step}")]
+    ZoneClipped { gap: f64, step: usize },
 }
 
 impl RunError {
     /// Process exit status: 2 for bad input, 3 for a solver failure, 4 for output errors.
     pub fn exit_code(&self) -> i32 {
         match self {
-            RunError::Case(_)
-            | RunError::Model(
-                ModelError::MeshRead(_)
-                | ModelError::MeshCheck(_)
-                | ModelError::Dof { .. }
-                | ModelError::Edge { .. }
-                | ModelError::Unsupported(_),
-            ) => 2,
-            RunError::Model(ModelError::Factor(_)) | RunError::Solve(_) => 3,
+            RunError::Case(_) | RunError::Model(ModelError::MeshRead(_) | ModelError::MeshCheck(_) | ModelError::Dof { .. } | ModelError::Edge { .. } | ModelError::Contact { .. } | ModelError::Unsupported(_)) => 2,
+            RunError::Model(ModelError::Factor(_)) | RunError::Solve(_) | RunError::ZoneClipped { .. } => 3,
             RunError::Write { .. } => 4,
         }
     }
@@ -59,6 +52,27 @@ pub struct PilotState {
     pub fy: f64,
 }
 
+/// Figures of the contact after a step.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct ContactFigures {
+    /// Nodes in contact, in stick, in slip.
+    pub n_contact: usize,
+    pub n_stick: usize,
+    pub n_slip: usize,
+    /// Contact semi-width (edges extrapolated with p² linear in x between the two outermost
+    /// contact nodes on each side).
+    pub a: f64,
+    /// Centre of the contact.
+    pub x_centre: f64,
+    /// Stick semi-width (each edge midway between the outermost stick node and the next node).
+    pub c: f64,
+    /// Semi-width of the zone where μ has not yet reached its dynamic value (midway rule).
+    pub b: f64,
+    /// Total contact force on the master side.
+    pub fx: f64,
+    pub fy: f64,
+}
+
 /// One converged load step.
 #[derive(Clone, Debug, Serialize)]
 pub struct StepRecord {
@@ -67,6 +81,10 @@ pub struct StepRecord {
     pub time: f64,
     pub traction_scale: f64,
     pub pilot: Option<PilotState>,
+    pub iterations: usize,
+    pub cutbacks: usize,
+    pub contact: Option<ContactFigures>,
+    pub wall_s: f64,
 }
 
 /// What `summary.json` holds.
@@ -79,9 +97,14 @@ pub struct Summary {
     pub triangles: usize,
     pub dofs_free: usize,
     pub dofs_retained: usize,
+    pub contact_nodes: usize,
+    pub candidate_gap: Option<f64>,
     pub stiffness_nonzeros_upper: usize,
     pub threads: usize,
     pub timings_s: crate::model::Timings,
+    /// Time in the contact iterations (part of `timings_s.solve`).
+    pub contact_solve_s: f64,
+    pub newton_iterations: usize,
     pub peak_memory_mib: Option<f64>,
     pub steps: Vec<StepRecord>,
     pub output_dir: String,
@@ -90,46 +113,113 @@ pub struct Summary {
 }
 
 impl Model {
-    /// Solves one load step: tractions at `scale`, the pilot driven by `control`.
-    /// Returns the free solution vector and the pilot state (if there is a pilot).
-    pub fn solve_step(
-        &self,
-        scale: f64,
-        control: [Control; 2],
-    ) -> Result<(Vec<f64>, Option<PilotState>), String> {
-        let f: Vec<f64> = self
-            .f_traction
-            .iter()
-            .zip(&self.f_prescribed)
-            .map(|(a, b)| scale * a + b)
-            .collect();
+    /// Solves one load step without contact: tractions at `scale`, the pilot driven by
+    /// `control`. Returns the free solution vector and the pilot state (if there is a pilot).
+    pub fn solve_step(&self, scale: f64, control: [Control; 2]) -> Result<(Vec<f64>, Option<PilotState>), String> {
+        let f = self.load(scale);
         let cond = &self.condensed;
         if self.dofs.pilot.is_none() {
             return Ok((cond.recover(&f, &[], &[]), None));
         }
         let g = cond.reduce(&f);
         let (u, r) = solve_pilot(&cond.s_dense(), &g, control, cond.krr_scale)?;
-        Ok((
-            cond.recover(&f, &r, &u),
-            Some(PilotState {
-                ux: u[0],
-                uy: u[1],
-                fx: r[0],
-                fy: r[1],
-            }),
-        ))
+        Ok((cond.recover(&f, &r, &u), Some(PilotState { ux: u[0], uy: u[1], fx: r[0], fy: r[1] })))
+    }
+
+    /// The free load vector at traction scale `scale`.
+    pub fn load(&self, scale: f64) -> Vec<f64> {
+        self.f_traction.iter().zip(&self.f_prescribed).map(|(a, b)| scale * a + b).collect()
+    }
+
+    /// Solves one load step with contact from the committed state `prev`.
+    pub fn solve_contact_step(&self, scale: f64, control: [Control; 2], prev: &State, opt: &solver::Options, law: Option<&crate::friction::FrictionLaw>) -> Result<(Vec<f64>, solver::StepOutcome), ContactError> {
+        let cm = self.contact.as_ref().expect("contact model");
+        let w0: Vec<f64> = self.contact_w0[0].iter().zip(&self.contact_w0[1]).map(|(a, b)| scale * a + b).collect();
+        let drive = control.map(|c| match c {
+            Control::Force(f) => PilotDrive::Force(f),
+            Control::Displacement(d) => PilotDrive::Displacement(d),
+        });
+        let out = cm.system.solve_step(&w0, drive, law, prev, opt)?;
+        let r = cm.retained_forces(&out.state, self.dofs.n_retained);
+        let u = self.condensed.recover_total(&self.load(scale), &r);
+        Ok((u, out))
+    }
+
+    /// Contact figures of a state.
+    pub fn contact_figures(&self, st: &State, law: Option<&crate::friction::FrictionLaw>) -> ContactFigures {
+        let cm = self.contact.as_ref().expect("contact model");
+        let m = &cm.pair.mortar;
+        let xs: Vec<f64> = m.slave_nodes.iter().map(|&n| self.mesh.nodes[n][0]).collect();
+        let p: Vec<f64> = (0..xs.len()).map(|j| st.f_n[j] / m.weight[j]).collect();
+        let on: Vec<usize> = (0..xs.len()).filter(|&j| st.status[j] != Status::Open).collect();
+        let mut fig = ContactFigures {
+            n_contact: on.len(),
+            n_stick: st.status.iter().filter(|s| **s == Status::Stick).count(),
+            n_slip: st.status.iter().filter(|s| **s == Status::Slip).count(),
+            ..Default::default()
+        };
+        let r = cm.retained_forces(st, self.dofs.n_retained);
+        let (mut fx, mut fy) = (0.0, 0.0);
+        for &node in &m.master_nodes {
+            for c in 0..2 {
+                if let crate::dofs::Dof::Free(i) = self.dofs.node[node][c] {
+                    let k = i - self.dofs.n_interior;
+                    if c == 0 { fx += r[k] } else { fy += r[k] }
+                }
+            }
+        }
+        fig.fx = fx;
+        fig.fy = fy;
+        if on.is_empty() {
+            return fig;
+        }
+        let (lo, hi) = (on[0], *on.last().expect("non-empty"));
+        let edge = |j1: usize, j2: usize| -> f64 {
+            // p² linear in x through the two outermost nodes, extrapolated to zero.
+            let (a, b) = (p[j1].max(0.0).powi(2), p[j2].max(0.0).powi(2));
+            let dx = xs[j1] - xs[j2];
+            if b > a && dx != 0.0 {
+                {
+                // at most one node spacing beyond the last contact node
+                let ext = a / (b - a) * dx;
+                xs[j1] + if dx > 0.0 { ext.min(dx) } else { ext.max(dx) }
+            }
+            } else {
+                xs[j1]
+            }
+        };
+        let left = if lo + 1 <= hi { edge(lo, lo + 1) } else { xs[lo] };
+        let right = if hi >= lo + 1 { edge(hi, hi - 1) } else { xs[hi] };
+        fig.a = 0.5 * (right - left);
+        fig.x_centre = 0.5 * (right + left);
+        let half_width = |pred: &dyn Fn(usize) -> bool| -> f64 {
+            let idx: Vec<usize> = (0..xs.len()).filter(|&j| pred(j)).collect();
+            if idx.is_empty() {
+                return 0.0;
+            }
+            let (a, b) = (idx[0], *idx.last().expect("non-empty"));
+            let l = if a > 0 { 0.5 * (xs[a] + xs[a - 1]) } else { xs[a] };
+            let r = if b + 1 < xs.len() { 0.5 * (xs[b] + xs[b + 1]) } else { xs[b] };
+            0.5 * (r - l)
+        };
+        fig.c = half_width(&|j| st.status[j] == Status::Stick);
+        if let Some(law) = law {
+            if let Ok(fd) = law.f_dynamic() {
+                let fs = law.f_static();
+                if fs > fd {
+                    let tol = 1e-9 * (fs - fd);
+                    fig.b = half_width(&|j| st.status[j] != Status::Open && law.mu(st.slip[j]) > fd + tol);
+                }
+            }
+        }
+        fig
     }
 }
 
 /// Solves `S u = g + r` on the pilot DOFs with, per component, either the force `r` or the
 /// displacement `u` given. Returns (u, r). `scale` is the stiffness scale of the pilot
 /// before condensation: a pivot below 1e-10 of it means nothing holds the pilot.
-pub fn solve_pilot(
-    s: &[f64],
-    g: &[f64],
-    control: [Control; 2],
-    scale: f64,
-) -> Result<([f64; 2], [f64; 2]), String> {
+pub fn solve_pilot(s: &[f64], g: &[f64], control: [Control; 2], scale: f64) -> Result<([f64; 2], [f64; 2]), String> {
     let mut u = [0.0; 2];
     let mut r = [0.0; 2];
     let mut free = Vec::new();
@@ -145,13 +235,7 @@ pub fn solve_pilot(
     // S_FF u_F = g_F + r_F − S_FD u_D
     let rhs: Vec<f64> = free
         .iter()
-        .map(|&i| {
-            g[i] + r[i]
-                - (0..2)
-                    .filter(|j| !free.contains(j))
-                    .map(|j| s[i * 2 + j] * u[j])
-                    .sum::<f64>()
-        })
+        .map(|&i| g[i] + r[i] - (0..2).filter(|j| !free.contains(j)).map(|j| s[i * 2 + j] * u[j]).sum::<f64>())
         .collect();
     match free.len() {
         1 => {
@@ -184,22 +268,27 @@ fn singular() -> String {
 }
 
 /// Runs a case file end to end and writes its output. Returns the summary.
+/// If the contact grows to the edge of its candidate zone, the zone is doubled and the run
+/// starts again.
 pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
     let case = Case::load(case_path)?;
-    let model = Model::build(&case, case_path)?;
-    let out_dir = opts
-        .out
-        .clone()
-        .or(case.output.dir.clone())
-        .unwrap_or_else(|| {
-            PathBuf::from("out").join(
-                case_path
-                    .file_stem()
-                    .map(|s| s.to_string_lossy().to_string())
-                    .unwrap_or("case".into()),
-            )
-        });
-    run_model(&case, case_path, model, &out_dir, opts)
+    let out_dir = opts.out.clone().or(case.output.dir.clone()).unwrap_or_else(|| {
+        PathBuf::from("out").join(case_path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or("case".into()))
+    });
+    let mut gap = None;
+    for _ in 0..8 {
+        let model = Model::build_with_gap(&case, case_path, gap)?;
+        match run_model(&case, case_path, model, &out_dir, opts) {
+            Err(RunError::ZoneClipped { gap: g, step }) => {
+                if !opts.quiet {
+                    eprintln!("note: the contact reached the edge of the candidate zone at step {step} (candidate gap {g:.3e}); doubling the zone and starting again");
+                }
+                gap = Some(2.0 * g);
+            }
+            other => return other,
+        }
+    }
+    Err(RunError::Solve("the contact zone kept growing: check the loads and the candidate gap".into()))
 }
 
 fn wr(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
@@ -210,68 +299,109 @@ fn wr(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
 }
 
 /// Steps through the stages of a built model, writing output to `out_dir`.
-pub fn run_model(
-    case: &Case,
-    case_path: &Path,
-    mut model: Model,
-    out_dir: &Path,
-    opts: &RunOptions,
-) -> Result<Summary, RunError> {
+pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
     std::fs::create_dir_all(out_dir).map_err(|source| RunError::Write {
         path: out_dir.display().to_string(),
         source,
     })?;
-    let stem = case_path
-        .file_stem()
-        .map(|s| s.to_string_lossy().to_string())
-        .unwrap_or("case".into());
-    let total = case.total_steps();
+    let stem = case_path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or("case".into());
     let has_pilot = model.dofs.pilot.is_some();
+    let law = case.contact.as_ref().and_then(|c| c.friction.clone());
+    let copt = case.contact.as_ref().map(|c| solver::Options {
+        method: c.method,
+        kappa: c.penalty.unwrap_or(100.0),
+        max_iterations: c.max_iterations.unwrap_or(60),
+        tolerance: c.tolerance.unwrap_or(1e-10),
+    });
+    let mut cstate = model.contact.as_ref().map(|c| c.system.initial_state());
     let mut control = [Control::Force(0.0); 2];
     let mut pilot = PilotState::default();
     let mut scale = 0.0;
     let mut records = Vec::new();
     let mut pvd = Vec::new();
     let mut step = 0;
-    let (mut t_solve, mut t_write) = (0.0, 0.0);
+    let (mut t_solve, mut t_write, mut t_contact) = (0.0, 0.0, 0.0);
+    let mut newton_total = 0;
     let mut failure: Option<String> = None;
+    const MAX_CUTBACKS: usize = 12;
     'stages: for (si, stage) in case.stages.iter().enumerate() {
-        let start = (pilot, scale);
+        let start = (pilot, scale, control);
         let target = [stage.pilot_x, stage.pilot_y];
-        for k in 1..=stage.steps {
-            step += 1;
-            let alpha = k as f64 / stage.steps as f64;
+        let nominal = 1.0 / stage.steps as f64;
+        let mut alpha = 0.0;
+        let mut dalpha = nominal;
+        let mut cutbacks = 0;
+        while alpha < 1.0 - 1e-12 {
+            let a_new = (alpha + dalpha).min(1.0);
             let t = Instant::now();
-            scale = match stage.traction_scale {
-                Some(v) => start.1 + alpha * (v - start.1),
+            let sc = match stage.traction_scale {
+                Some(v) => start.1 + a_new * (v - start.1),
                 None => start.1,
             };
             let (u0, r0) = ([start.0.ux, start.0.uy], [start.0.fx, start.0.fy]);
+            let mut ctl = control;
             for c in 0..2 {
-                control[c] = match (target[c], control[c]) {
-                    (Some(Control::Force(f)), _) => Control::Force(r0[c] + alpha * (f - r0[c])),
-                    (Some(Control::Displacement(d)), _) => {
-                        Control::Displacement(u0[c] + alpha * (d - u0[c]))
-                    }
+                ctl[c] = match (target[c], start.2[c]) {
+                    (Some(Control::Force(f)), _) => Control::Force(r0[c] + a_new * (f - r0[c])),
+                    (Some(Control::Displacement(d)), _) => Control::Displacement(u0[c] + a_new * (d - u0[c])),
                     (None, Control::Force(_)) => Control::Force(r0[c]),
                     (None, Control::Displacement(_)) => Control::Displacement(u0[c]),
                 };
             }
-            let (u, p) = match model.solve_step(scale, control) {
-                Ok(v) => v,
-                Err(m) => {
-                    failure = Some(format!("step {step}: {m}"));
-                    break 'stages;
+            let (u, p, iterations) = if let (Some(prev), Some(opt)) = (&cstate, &copt) {
+                let tc = Instant::now();
+                let res = model.solve_contact_step(sc, ctl, prev, opt, law.as_ref());
+                t_contact += tc.elapsed().as_secs_f64();
+                match res {
+                    Ok((u, out)) => {
+                        let p = PilotState { ux: out.state.pilot_u[0], uy: out.state.pilot_u[1], fx: out.state.pilot_f[0], fy: out.state.pilot_f[1] };
+                        let it = out.iterations;
+                        newton_total += it;
+                        // Clipping: contact on the rim of the candidate zone.
+                        let cm = model.contact.as_ref().expect("contact");
+                        let rim = cm.pair.mortar.slave_nodes.iter().zip(&out.state.status).any(|(n, s)| *s != Status::Open && cm.pair.rim_nodes.binary_search(n).is_ok());
+                        if rim {
+                            return Err(RunError::ZoneClipped { gap: cm.pair.candidate_gap, step: step + 1 });
+                        }
+                        cstate = Some(out.state);
+                        (u, has_pilot.then_some(p), it)
+                    }
+                    Err(e) => {
+                        if cutbacks < MAX_CUTBACKS {
+                            cutbacks += 1;
+                            dalpha *= 0.5;
+                            if !opts.quiet {
+                                eprintln!("step {} of stage {si}: {e}; cutting the load increment back to {dalpha:.3e} of the stage", step + 1);
+                            }
+                            continue;
+                        }
+                        failure = Some(format!("step {}: {e} (after {MAX_CUTBACKS} cutbacks)", step + 1));
+                        break 'stages;
+                    }
+                }
+            } else {
+                match model.solve_step(sc, ctl) {
+                    Ok((u, p)) => (u, p, 0),
+                    Err(m) => {
+                        failure = Some(format!("step {}: {m}", step + 1));
+                        break 'stages;
+                    }
                 }
             };
+            if u.iter().any(|v| !v.is_finite()) {
+                failure = Some(format!("step {}: the solution is not finite", step + 1));
+                break 'stages;
+            }
+            alpha = a_new;
+            control = ctl;
+            scale = sc;
             if let Some(p) = p {
                 pilot = p;
             }
-            if u.iter().any(|v| !v.is_finite()) {
-                failure = Some(format!("step {step}: the solution is not finite"));
-                break 'stages;
-            }
-            t_solve += t.elapsed().as_secs_f64();
+            step += 1;
+            let wall = t.elapsed().as_secs_f64();
+            t_solve += wall;
+            let figures = cstate.as_ref().map(|st| model.contact_figures(st, law.as_ref()));
             let time = si as f64 + alpha;
             records.push(StepRecord {
                 step,
@@ -279,27 +409,30 @@ pub fn run_model(
                 time,
                 traction_scale: scale,
                 pilot: has_pilot.then_some(pilot),
+                iterations,
+                cutbacks,
+                contact: figures,
+                wall_s: wall,
             });
-            if case.output.vtu && (step % case.output.every == 0 || step == total) {
+            let last = si + 1 == case.stages.len() && alpha >= 1.0 - 1e-12;
+            if case.output.vtu && (step % case.output.every == 0 || last) {
                 let t = Instant::now();
                 let name = format!("{stem}_{step:04}.vtu");
-                wr(
-                    &out_dir.join(&name),
-                    &bodies_vtu(&model, &u, case).map_err(|e| RunError::Write {
-                        path: name.clone(),
-                        source: std::io::Error::other(e.to_string()),
-                    })?,
-                )?;
-                pvd.push(PvdEntry {
-                    time,
-                    part: 0,
-                    file: name,
-                });
-                wr(
-                    &out_dir.join(format!("{stem}.pvd")),
-                    output::pvd(&pvd).as_bytes(),
-                )?;
+                let bytes = bodies_vtu(&model, &u, case).map_err(|e| RunError::Write { path: name.clone(), source: std::io::Error::other(e.to_string()) })?;
+                wr(&out_dir.join(&name), &bytes)?;
+                pvd.push(PvdEntry { time, part: 0, file: name });
+                if let Some(st) = &cstate {
+                    let cname = format!("{stem}_contact_{step:04}.vtu");
+                    let bytes = contact_vtu(&model, st).map_err(|e| RunError::Write { path: cname.clone(), source: std::io::Error::other(e.to_string()) })?;
+                    wr(&out_dir.join(&cname), &bytes)?;
+                    pvd.push(PvdEntry { time, part: 1, file: cname });
+                    wr(&out_dir.join(format!("contact_{step:04}.csv")), contact_csv(&model, st).as_bytes())?;
+                }
+                wr(&out_dir.join(format!("{stem}.pvd")), output::pvd(&pvd).as_bytes())?;
                 t_write += t.elapsed().as_secs_f64();
+            }
+            if dalpha < nominal {
+                dalpha = (2.0 * dalpha).min(nominal);
             }
         }
     }
@@ -309,15 +442,10 @@ pub fn run_model(
         .iter()
         .map(|r| {
             let p = r.pilot.unwrap_or_default();
+            let c = r.contact.unwrap_or_default();
             vec![
-                r.step as f64,
-                r.stage as f64,
-                r.time,
-                r.traction_scale,
-                p.ux,
-                p.uy,
-                p.fx,
-                p.fy,
+                r.step as f64, r.stage as f64, r.time, r.traction_scale, p.ux, p.uy, p.fx, p.fy, r.iterations as f64, r.cutbacks as f64,
+                c.n_contact as f64, c.n_stick as f64, c.n_slip as f64, c.a, c.x_centre, c.c, c.b, c.fx, c.fy, r.wall_s,
             ]
         })
         .collect();
@@ -325,14 +453,8 @@ pub fn run_model(
         &out_dir.join("history.csv"),
         output::csv(
             &[
-                "step",
-                "stage",
-                "time",
-                "traction_scale",
-                "pilot_ux",
-                "pilot_uy",
-                "pilot_fx",
-                "pilot_fy",
+                "step", "stage", "time", "traction_scale", "pilot_ux", "pilot_uy", "pilot_fx", "pilot_fy", "iterations", "cutbacks", "n_contact", "n_stick", "n_slip", "a", "x_centre", "c", "b",
+                "contact_fx", "contact_fy", "wall_s",
             ],
             &rows,
         )
@@ -346,9 +468,13 @@ pub fn run_model(
         triangles: model.elems.len(),
         dofs_free: model.dofs.n_free(),
         dofs_retained: model.dofs.n_retained,
+        contact_nodes: model.contact.as_ref().map_or(0, |c| c.system.ns),
+        candidate_gap: model.contact.as_ref().map(|c| c.pair.candidate_gap),
         stiffness_nonzeros_upper: model.k.row_idx.len(),
         threads: rayon::current_num_threads(),
         timings_s: model.timings.clone(),
+        contact_solve_s: t_contact,
+        newton_iterations: newton_total,
         peak_memory_mib: output::peak_memory_bytes().map(|b| b as f64 / (1024.0 * 1024.0)),
         steps: records,
         output_dir: out_dir.display().to_string(),
@@ -357,30 +483,113 @@ pub fn run_model(
             Some(m) => format!("failed at {m}; the output holds the steps before it"),
         },
     };
-    wr(
-        &out_dir.join("summary.json"),
-        serde_json::to_string_pretty(&summary)
-            .expect("serialisable")
-            .as_bytes(),
-    )?;
+    wr(&out_dir.join("summary.json"), serde_json::to_string_pretty(&summary).expect("serialisable").as_bytes())?;
     if let Some(m) = failure {
         return Err(RunError::Solve(m));
     }
     if !opts.quiet {
+        let t = &summary.timings_s;
         eprintln!(
-            "{}: {} steps, {} nodes, {} triangles, {} DOFs; assemble {:.3} s, factorise {:.3} s, solve {:.3} s; output in {}",
+            "{}: {} steps, {} nodes, {} triangles, {} DOFs ({} retained); assemble {:.3} s, factorise {:.3} s, condense {:.3} s, solve {:.3} s; output in {}",
             case_path.display(),
-            total,
+            step,
             summary.nodes,
             summary.triangles,
             summary.dofs_free,
-            summary.timings_s.assemble,
-            summary.timings_s.factorise,
-            summary.timings_s.solve,
+            summary.dofs_retained,
+            t.assemble,
+            t.analyse + t.factorise,
+            t.condense,
+            t.solve,
             out_dir.display()
         );
+        if let Some(c) = summary.steps.last().and_then(|s| s.contact) {
+            eprintln!("contact: semi-width a = {:.6}, stick semi-width c = {:.6}, {} nodes in contact, force ({:.6}, {:.6}), {} Newton iterations in all", c.a, c.c, c.n_contact, c.fx, c.fy, summary.newton_iterations);
+        }
     }
     Ok(summary)
+}
+
+/// Per slave node: (p, q, gap, slip, slip increment, status, μ, q/p).
+fn contact_fields(model: &Model, st: &State) -> Vec<[f64; 8]> {
+    let m = &model.contact.as_ref().expect("contact").pair.mortar;
+    (0..m.slave_nodes.len())
+        .map(|j| {
+            let p = st.f_n[j] / m.weight[j];
+            // Shear traction on the slave body along its tangent (the master force is −F_t τ on the slave).
+            let q = -st.f_t[j] / m.weight[j];
+            let ratio = if p > 0.0 { q / p } else { 0.0 };
+            [p, q, st.gap[j], st.slip[j], st.dv[j], st.status[j].code(), st.mu[j], ratio]
+        })
+        .collect()
+}
+
+const CONTACT_FIELDS: [&str; 8] = ["pressure", "shear", "gap", "slip", "slip_increment", "status", "mu", "q_over_p"];
+
+/// The contact dataset: the slave edges of the candidate zone with the nodal contact fields.
+pub fn contact_vtu(model: &Model, st: &State) -> Result<Vec<u8>, vtkio::Error> {
+    let cm = model.contact.as_ref().expect("contact");
+    let m = &cm.pair.mortar;
+    let mut index = std::collections::HashMap::new();
+    let mut points = Vec::new();
+    let mut node_ids = Vec::new();
+    for e in &cm.pair.zone_edges {
+        for &n in e {
+            index.entry(n).or_insert_with(|| {
+                points.push(model.mesh.nodes[n]);
+                node_ids.push(n);
+                points.len() - 1
+            });
+        }
+    }
+    let cells: Vec<Vec<usize>> = cm.pair.zone_edges.iter().map(|e| e.iter().map(|n| index[n]).collect()).collect();
+    let fields = contact_fields(model, st);
+    let slot: std::collections::HashMap<usize, usize> = m.slave_nodes.iter().enumerate().map(|(j, &n)| (n, j)).collect();
+    let mut data: Vec<vtu::Field> = CONTACT_FIELDS
+        .iter()
+        .enumerate()
+        .map(|(k, name)| vtu::Field::scalar(name, node_ids.iter().map(|n| slot.get(n).map_or(0.0, |&j| fields[j][k])).collect()))
+        .collect();
+    let mut traction = Vec::new();
+    let mut normal = Vec::new();
+    for n in &node_ids {
+        match slot.get(n) {
+            Some(&j) => {
+                let (p, q) = (fields[j][0], fields[j][1]);
+                let (nv, tv) = (m.normal[j], m.tangent[j]);
+                // Traction on the slave body: pressure pushes against its outward normal.
+                traction.extend([-p * nv[0] + q * tv[0], -p * nv[1] + q * tv[1], 0.0]);
+                normal.extend([nv[0], nv[1], 0.0]);
+            }
+            None => {
+                traction.extend([0.0; 3]);
+                normal.extend([0.0; 3]);
+            }
+        }
+    }
+    data.push(vtu::Field::vector("traction", traction));
+    data.push(vtu::Field::vector("normal", normal));
+    vtu::unstructured("contact", &points, &cells, vtu::Kind::Line3, data, vec![])
+}
+
+/// The per-step CSV along the slave face.
+pub fn contact_csv(model: &Model, st: &State) -> String {
+    let m = &model.contact.as_ref().expect("contact").pair.mortar;
+    let fields = contact_fields(model, st);
+    let rows: Vec<Vec<f64>> = m
+        .slave_nodes
+        .iter()
+        .zip(&fields)
+        .map(|(&n, f)| {
+            let x = model.mesh.nodes[n];
+            let mut r = vec![x[0], x[1]];
+            r.extend_from_slice(f);
+            r
+        })
+        .collect();
+    let mut header = vec!["x", "y"];
+    header.extend(CONTACT_FIELDS);
+    output::csv(&header, &rows)
 }
 
 /// The bodies dataset of one step: displacement, stresses, von Mises, body id.
@@ -409,17 +618,7 @@ pub fn bodies_vtu(model: &Model, u: &[f64], case: &Case) -> Result<Vec<u8>, vtki
         szz.push(s[3]);
         vm.push(crate::elasticity::von_mises(s[0], s[1], s[2], s[3]));
     }
-    let cells: Vec<Vec<usize>> = model
-        .elems
-        .iter()
-        .map(|(e, _)| {
-            model.mesh.triangles[*e]
-                .nodes
-                .iter()
-                .map(|&n| index[n])
-                .collect()
-        })
-        .collect();
+    let cells: Vec<Vec<usize>> = model.elems.iter().map(|(e, _)| model.mesh.triangles[*e].nodes.iter().map(|&n| index[n]).collect()).collect();
     let body: Vec<f64> = model.elem_body.iter().map(|&b| b as f64).collect();
     vtu::unstructured(
         &case.title,

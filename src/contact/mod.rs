@@ -1,0 +1,316 @@
+//! Mortar contact between two curved faces: the pairing and the candidate zone
+//! ([`build_pair`]), the mortar integrals ([`mortar`]) and the contact solver on the condensed
+//! system ([`solver`]).
+//!
+//! Pairing, normals and initial gaps are taken in the reference configuration (small
+//! deformation), so the constraint operator is linear in the displacements and is built once.
+
+pub mod mortar;
+pub mod solver;
+
+use crate::loads::EdgeOrientation;
+use crate::mesh::Mesh;
+use mortar::Mortar;
+
+/// The geometric part of a contact pair: the candidate zone and its mortar operator.
+pub struct Pair {
+    pub mortar: Mortar,
+    /// Slave edges of the candidate zone (nodes ordered with the slave body on the left).
+    pub zone_edges: Vec<[usize; 3]>,
+    /// Nodes of the zone edges next to slave edges outside the zone: contact there means the
+    /// zone may clip it.
+    pub rim_nodes: Vec<usize>,
+    /// Candidate gap used.
+    pub candidate_gap: f64,
+}
+
+/// What stops a pair from being built.
+#[derive(Debug, thiserror::Error)]
+pub enum PairError {
+    #[error("contact: boundary element {tag} of group `{group}` is not an edge of any triangle of the bodies in use")]
+    Dangling { tag: u64, group: String },
+    #[error(
+        "contact: no slave node of `{slave}` is within the candidate gap {gap:e} of `{master}` (smallest initial gap {min:e}); \
+         the faces do not face each other, or raise `contact.candidate_gap`"
+    )]
+    EmptyZone { slave: String, master: String, gap: f64, min: f64 },
+    #[error("contact: slave `{slave}` and master `{master}` penetrate initially by {depth:e} at ({x:.6}, {y:.6}); move the bodies apart")]
+    Penetration { slave: String, master: String, depth: f64, x: f64, y: f64 },
+}
+
+/// Oriented edges of a curve group.
+pub fn oriented_edges(mesh: &Mesh, orient: &EdgeOrientation, group: &str) -> Result<Vec<[usize; 3]>, PairError> {
+    let g = mesh.group(group).expect("checked");
+    g.elements
+        .iter()
+        .map(|&l| {
+            orient.oriented_nodes(mesh, l).ok_or(PairError::Dangling {
+                tag: mesh.lines[l].tag,
+                group: group.into(),
+            })
+        })
+        .collect()
+}
+
+/// Default candidate gap: 0.5 % of the diagonal of the slave face's bounding box.
+pub fn default_candidate_gap(mesh: &Mesh, slave: &[[usize; 3]]) -> f64 {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for e in slave {
+        for &n in e {
+            for i in 0..2 {
+                lo[i] = lo[i].min(mesh.nodes[n][i]);
+                hi[i] = hi[i].max(mesh.nodes[n][i]);
+            }
+        }
+    }
+    0.005 * (hi[0] - lo[0]).hypot(hi[1] - lo[1])
+}
+
+/// Initial gap of a slave point along its normal: the smallest |g| over master edges hit
+/// within their parameter range, ignoring hits farther than `reach` (a normal line far from the
+/// contact can cross the other face behind the point without any overlap).
+fn point_gap(mesh: &Mesh, master: &[[usize; 3]], x: [f64; 2], n: [f64; 2], reach: f64) -> Option<f64> {
+    let mut best: Option<f64> = None;
+    for e in master {
+        let xm = e.map(|k| mesh.nodes[k]);
+        if let Some((r, g)) = mortar::project_along(&xm, x, n) {
+            if (-1.0 - 1e-9..=1.0 + 1e-9).contains(&r) && g.abs() <= reach && best.is_none_or(|b| g.abs() < b.abs()) {
+                best = Some(g);
+            }
+        }
+    }
+    best
+}
+
+/// Chooses the candidate zone (slave edges with a node whose initial gap is at most
+/// `candidate_gap`) and builds the mortar operator on it.
+pub fn build_pair(mesh: &Mesh, slave_name: &str, master_name: &str, slave: &[[usize; 3]], master: &[[usize; 3]], candidate_gap: f64) -> Result<Pair, PairError> {
+    let mut zone = Vec::new();
+    let mut min_gap = f64::INFINITY;
+    for (i, e) in slave.iter().enumerate() {
+        let xs = e.map(|k| mesh.nodes[k]);
+        let mut in_zone = false;
+        for s in [-1.0, 0.0, 1.0] {
+            let (x, n, _, _) = mortar::frame(&xs, s);
+            let h = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
+            if let Some(g) = point_gap(mesh, master, x, n, 10.0 * (candidate_gap + h)) {
+                min_gap = min_gap.min(g);
+                if g < -1e-9 * h {
+                    return Err(PairError::Penetration {
+                        slave: slave_name.into(),
+                        master: master_name.into(),
+                        depth: -g,
+                        x: x[0],
+                        y: x[1],
+                    });
+                }
+                if g <= candidate_gap {
+                    in_zone = true;
+                }
+            }
+        }
+        if in_zone {
+            zone.push(i);
+        }
+    }
+    if zone.is_empty() {
+        return Err(PairError::EmptyZone {
+            slave: slave_name.into(),
+            master: master_name.into(),
+            gap: candidate_gap,
+            min: min_gap,
+        });
+    }
+    let zone_edges: Vec<[usize; 3]> = zone.iter().map(|&i| slave[i]).collect();
+    // Master edges near the zone.
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    let mut hmax: f64 = 0.0;
+    for e in &zone_edges {
+        let a = mesh.nodes[e[0]];
+        let b = mesh.nodes[e[1]];
+        hmax = hmax.max((a[0] - b[0]).hypot(a[1] - b[1]));
+        for &n in e {
+            for i in 0..2 {
+                lo[i] = lo[i].min(mesh.nodes[n][i]);
+                hi[i] = hi[i].max(mesh.nodes[n][i]);
+            }
+        }
+    }
+    let reach = 2.0 * candidate_gap + 2.0 * hmax;
+    let near: Vec<[usize; 3]> = master
+        .iter()
+        .filter(|e| {
+            e.iter().any(|&k| {
+                let p = mesh.nodes[k];
+                p[0] >= lo[0] - reach && p[0] <= hi[0] + reach && p[1] >= lo[1] - reach && p[1] <= hi[1] + reach
+            })
+        })
+        .copied()
+        .collect();
+    let mortar = mortar::build(&mesh.nodes, &zone_edges, &near);
+    // The rim: zone vertices shared with a slave edge outside the zone. Contact there means
+    // the zone may clip it (a zone that is the whole slave face has no rim).
+    let in_zone: std::collections::HashSet<usize> = zone.iter().copied().collect();
+    let outside: std::collections::HashSet<usize> = slave
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !in_zone.contains(i))
+        .flat_map(|(_, e)| [e[0], e[1]])
+        .collect();
+    let mut rim_nodes = Vec::new();
+    for e in &zone_edges {
+        if outside.contains(&e[0]) || outside.contains(&e[1]) {
+            rim_nodes.extend_from_slice(e);
+        }
+    }
+    rim_nodes.sort_unstable();
+    rim_nodes.dedup();
+    Ok(Pair {
+        mortar,
+        zone_edges,
+        rim_nodes,
+        candidate_gap,
+    })
+}
+
+/// A contact pair on a condensed model: the mortar operator expressed in the retained DOFs
+/// and the Delassus operator of the solver.
+pub struct ContactModel {
+    pub pair: Pair,
+    pub system: solver::ContactSystem,
+    /// Rows of `Y` over the retained DOFs (index into R, coefficient), in the order of μ.
+    pub y_rows: Vec<Vec<(usize, f64)>>,
+    /// Composite plane-strain modulus of the pair.
+    pub e_star: f64,
+    /// Whether each retained DOF belongs to the master side (for the total contact force).
+    pub master_dof: Vec<bool>,
+}
+
+impl ContactModel {
+    /// Expresses the pair's mortar operator in the retained DOFs of `dofs` and builds the
+    /// Delassus operator from the condensed stiffness.
+    pub fn new(pair: Pair, dofs: &crate::dofs::DofMap, cond: &crate::condense::Condensed, e_star: f64) -> ContactModel {
+        use crate::dofs::Dof;
+        let m0 = &pair.mortar;
+        let ns = m0.slave_nodes.len();
+        let n_i = dofs.n_interior;
+        let n_r = dofs.n_retained;
+        let has_pilot = dofs.pilot.is_some();
+        let m = 2 * ns + if has_pilot { 2 } else { 0 };
+        let mut gap0 = m0.gap0.clone();
+        let mut v0 = vec![0.0; ns];
+        let mut y_rows = Vec::with_capacity(m);
+        let to_r = |row: &mortar::Row, constant: &mut f64| -> Vec<(usize, f64)> {
+            let mut out = Vec::new();
+            for (node, coef) in row {
+                for c in 0..2 {
+                    match dofs.node[*node][c] {
+                        Dof::Free(i) if i >= n_i => out.push((i - n_i, coef[c])),
+                        Dof::Fixed(q) => *constant += coef[c] * dofs.prescribed[q],
+                        Dof::Free(_) | Dof::Unused => panic!("contact node {node} is not retained"),
+                    }
+                }
+            }
+            out
+        };
+        for j in 0..ns {
+            let r = to_r(&m0.g_rows[j], &mut gap0[j]);
+            y_rows.push(r);
+        }
+        for j in 0..ns {
+            let r = to_r(&m0.t_rows[j], &mut v0[j]);
+            y_rows.push(r);
+        }
+        if let Some(p) = dofs.pilot {
+            for c in 0..2 {
+                y_rows.push(vec![(p[c] - n_i, 1.0)]);
+            }
+        }
+        // Z = L_RR⁻¹ Yᵀ, W = Zᵀ Z.
+        let mut z = faer::Mat::<f64>::zeros(n_r, m);
+        for (col, row) in y_rows.iter().enumerate() {
+            for &(r, v) in row {
+                z[(r, col)] += v;
+            }
+        }
+        let par = faer::get_global_parallelism();
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(cond.chol.l_rr(), z.as_mut(), par);
+        let mut w = faer::Mat::<f64>::zeros(m, m);
+        faer::linalg::matmul::matmul(w.as_mut(), faer::Accum::Replace, z.transpose(), z.as_ref(), 1.0, par);
+        let mut kg = [0.0; 2];
+        if let Some(p) = dofs.pilot {
+            for &(r, k) in &cond.grounding {
+                for c in 0..2 {
+                    if r == p[c] - n_i {
+                        kg[c] = k;
+                    }
+                }
+            }
+        }
+        let eps_unit = (0..ns).map(|j| e_star * m0.weight[j] / m0.h[j]).collect();
+        let mut master_dof = vec![false; n_r];
+        for &node in &m0.master_nodes {
+            for c in 0..2 {
+                if let Dof::Free(i) = dofs.node[node][c] {
+                    if i >= n_i {
+                        master_dof[i - n_i] = true;
+                    }
+                }
+            }
+        }
+        let system = solver::ContactSystem {
+            ns,
+            has_pilot,
+            w,
+            z,
+            gap0,
+            v0,
+            c: e_star,
+            eps_unit,
+            kg,
+        };
+        ContactModel {
+            pair,
+            system,
+            y_rows,
+            e_star,
+            master_dof,
+        }
+    }
+
+    /// `w0 = Zᵀ L_RR⁻¹ g` for a condensed load `g`.
+    pub fn w0(&self, cond: &crate::condense::Condensed, g: &[f64]) -> Vec<f64> {
+        let n_r = g.len();
+        let mut x = faer::Mat::<f64>::zeros(n_r, 1);
+        for i in 0..n_r {
+            x[(i, 0)] = g[i];
+        }
+        let par = faer::get_global_parallelism();
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(cond.chol.l_rr(), x.as_mut(), par);
+        let m = self.system.z.ncols();
+        let mut out = faer::Mat::<f64>::zeros(m, 1);
+        faer::linalg::matmul::matmul(out.as_mut(), faer::Accum::Replace, self.system.z.transpose(), x.as_ref(), 1.0, par);
+        (0..m).map(|i| out[(i, 0)]).collect()
+    }
+
+    /// The forces on the retained DOFs, `r = Yᵀ μ`, of a contact state.
+    pub fn retained_forces(&self, st: &solver::State, n_r: usize) -> Vec<f64> {
+        let ns = self.system.ns;
+        let mut r = vec![0.0; n_r];
+        for (i, row) in self.y_rows.iter().enumerate() {
+            let mu = if i < ns {
+                st.f_n[i]
+            } else if i < 2 * ns {
+                st.f_t[i - ns]
+            } else {
+                st.z[i - 2 * ns]
+            };
+            if mu != 0.0 {
+                for &(k, v) in row {
+                    r[k] += v * mu;
+                }
+            }
+        }
+        r
+    }
+}

@@ -1,0 +1,259 @@
+//! Segment-to-segment mortar integrals on quadratic (3-node) edges, in the reference
+//! configuration (small deformation: the constraint operator is linear in the displacements).
+//!
+//! For a slave point `X(s)` with outward unit normal `n(s)` and tangent `τ(s)` (n rotated by
+//! −90°), the master point `Y` is where the normal line `X + g n` meets the master surface;
+//! `g0 = (Y − X)·n` is the initial gap. With the multiplier basis `Φ_j = N_j` (the standard
+//! quadratic basis of the slave edges), the nodal quantities are
+//! ```text
+//!   w_j  = ∫ Φ_j dΓ                                   (nodal weight)
+//!   ĝ_j  = (1/w_j) ∫ Φ_j [g0 + (u_m(Y) − u_s(X))·n] dΓ   (nodal gap)
+//!   v̂_j  = (1/w_j) ∫ Φ_j (u_m(Y) − u_s(X))·τ dΓ         (nodal relative tangential displacement)
+//! ```
+//! i.e. `ĝ = g0 + Ĝ u` and `v̂ = T̂ u`, with rows `Ĝ_j`, `T̂_j` over the slave and master nodes
+//! (the D and M blocks of the mortar method, divided by `w_j`). The nodal contact forces
+//! `F_n,j = w_j p_j`, `F_t,j` act on the displacements through `Ĝᵀ F_n + T̂ᵀ F_t`.
+//!
+//! The integrals are split into segments: the pieces of a slave edge whose points project
+//! onto one master edge. Each segment is integrated with 5-point Gauss.
+
+use crate::quadrature::gauss_legendre;
+use crate::shapes::lin3;
+use std::collections::BTreeMap;
+
+/// A row of the mortar operator: (mesh node, coefficient vector for (ux, uy)).
+pub type Row = Vec<(usize, [f64; 2])>;
+
+/// The mortar operator of one contact pair.
+#[derive(Clone, Debug, Default)]
+pub struct Mortar {
+    /// Slave nodes carrying a multiplier (mesh node indices), sorted by position along the face.
+    pub slave_nodes: Vec<usize>,
+    /// Nodal weights `w_j = ∫ Φ_j`.
+    pub weight: Vec<f64>,
+    /// Nodal initial gaps.
+    pub gap0: Vec<f64>,
+    /// Rows of `Ĝ` (nodal gap per unit displacement).
+    pub g_rows: Vec<Row>,
+    /// Rows of `T̂` (nodal tangential relative displacement).
+    pub t_rows: Vec<Row>,
+    /// Unit normal and tangent at each slave node (from the edge geometry).
+    pub normal: Vec<[f64; 2]>,
+    pub tangent: Vec<[f64; 2]>,
+    /// Mesh nodes of the master side that appear in the rows.
+    pub master_nodes: Vec<usize>,
+    /// A representative element size at each slave node (edge chord).
+    pub h: Vec<f64>,
+}
+
+/// Projects `x` along direction `n` onto the quadratic edge `xm`: returns `(r, g)` with
+/// `xm(r) = x + g n`; `r` may lie outside [−1, 1] (the edge's quadratic extension).
+pub fn project_along(xm: &[[f64; 2]; 3], x: [f64; 2], n: [f64; 2]) -> Option<(f64, f64)> {
+    let mut r = 0.0;
+    let p = lin3::point(xm, 0.0);
+    let mut g = (p[0] - x[0]) * n[0] + (p[1] - x[1]) * n[1];
+    for _ in 0..50 {
+        let p = lin3::point(xm, r);
+        let t = lin3::tangent(xm, r);
+        let f = [p[0] - x[0] - g * n[0], p[1] - x[1] - g * n[1]];
+        // J = [t, −n]
+        let det = t[0] * (-n[1]) - (-n[0]) * t[1];
+        if det.abs() < 1e-300 {
+            return None;
+        }
+        let dr = (f[0] * (-n[1]) - (-n[0]) * f[1]) / det;
+        let dg = (t[0] * f[1] - t[1] * f[0]) / det;
+        r -= dr;
+        g -= dg;
+        if dr.abs() < 1e-14 * (1.0 + r.abs()) {
+            return Some((r, g));
+        }
+        if !r.is_finite() || r.abs() > 1e3 {
+            return None;
+        }
+    }
+    Some((r, g))
+}
+
+/// Position, unit outward normal, unit tangent and length element of a slave edge at `s`.
+/// The edge is oriented with its body on the left, so the outward normal is `(t_y, −t_x)/|t|`.
+pub fn frame(xs: &[[f64; 2]; 3], s: f64) -> ([f64; 2], [f64; 2], [f64; 2], f64) {
+    let x = lin3::point(xs, s);
+    let t = lin3::tangent(xs, s);
+    let j = t[0].hypot(t[1]);
+    let n = [t[1] / j, -t[0] / j];
+    (x, n, [n[1], -n[0]], j)
+}
+
+/// The master parameter hit by the normal from slave parameter `s`.
+fn r_of_s(xs: &[[f64; 2]; 3], xm: &[[f64; 2]; 3], s: f64) -> Option<f64> {
+    let (x, n, _, _) = frame(xs, s);
+    project_along(xm, x, n).map(|(r, _)| r)
+}
+
+/// Slave parameter in [lo, hi] where `r(s) = target`, by bisection (r is monotone in s).
+fn solve_r(xs: &[[f64; 2]; 3], xm: &[[f64; 2]; 3], target: f64, mut lo: f64, mut hi: f64) -> Option<f64> {
+    let mut flo = r_of_s(xs, xm, lo)? - target;
+    for _ in 0..80 {
+        let mid = 0.5 * (lo + hi);
+        let fm = r_of_s(xs, xm, mid)? - target;
+        if (fm < 0.0) == (flo < 0.0) {
+            lo = mid;
+            flo = fm;
+        } else {
+            hi = mid;
+        }
+        if hi - lo < 1e-15 {
+            break;
+        }
+    }
+    Some(0.5 * (lo + hi))
+}
+
+/// Builds the mortar operator for the slave edges `slave` and master edges `master`, each given
+/// by its three mesh nodes ordered with its body on the left, over node coordinates `x`.
+pub fn build(x: &[[f64; 2]], slave: &[[usize; 3]], master: &[[usize; 3]]) -> Mortar {
+    #[derive(Default)]
+    struct Acc {
+        w: f64,
+        g0: f64,
+        g: BTreeMap<usize, [f64; 2]>,
+        t: BTreeMap<usize, [f64; 2]>,
+        h: f64,
+        n: [f64; 2],
+        tau: [f64; 2],
+    }
+    let mut acc: BTreeMap<usize, Acc> = BTreeMap::new();
+    let coords = |e: &[usize; 3]| e.map(|k| x[k]);
+    // Bounding boxes of the master edges for a quick search.
+    let mboxes: Vec<([f64; 2], [f64; 2])> = master
+        .iter()
+        .map(|e| {
+            let c = coords(e);
+            let mut lo = [f64::INFINITY; 2];
+            let mut hi = [f64::NEG_INFINITY; 2];
+            for p in c {
+                for i in 0..2 {
+                    lo[i] = lo[i].min(p[i]);
+                    hi[i] = hi[i].max(p[i]);
+                }
+            }
+            (lo, hi)
+        })
+        .collect();
+    let mut master_nodes = std::collections::BTreeSet::new();
+    for se in slave {
+        let xs = coords(se);
+        let chord = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
+        // Master edges near this slave edge: within a few chord lengths plus the largest gap
+        // the normals can span (the candidate zone was chosen by gap beforehand).
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in xs {
+            for i in 0..2 {
+                lo[i] = lo[i].min(p[i]);
+                hi[i] = hi[i].max(p[i]);
+            }
+        }
+        let mut segments: Vec<(f64, f64, usize)> = Vec::new();
+        for (mi, me) in master.iter().enumerate() {
+            let (mlo, mhi) = mboxes[mi];
+            let reach = 10.0 * chord + (mhi[0] - mlo[0]).max(mhi[1] - mlo[1]);
+            if mlo[0] > hi[0] + reach || mhi[0] < lo[0] - reach || mlo[1] > hi[1] + reach || mhi[1] < lo[1] - reach {
+                continue;
+            }
+            let xm = coords(me);
+            let (Some(ra), Some(rb)) = (r_of_s(&xs, &xm, -1.0), r_of_s(&xs, &xm, 1.0)) else { continue };
+            if ra.max(rb) < -1.0 || ra.min(rb) > 1.0 {
+                continue;
+            }
+            // The s-interval where r(s) ∈ [−1, 1].
+            let mut s_lo: f64 = -1.0;
+            let mut s_hi: f64 = 1.0;
+            for target in [-1.0, 1.0] {
+                if (ra - target) * (rb - target) < 0.0 {
+                    let s = solve_r(&xs, &xm, target, -1.0, 1.0).unwrap_or(0.0);
+                    // Which side of s is inside?
+                    // r(s) is monotone: the left part (s < s*) is inside iff r(−1) is.
+                    let inside_left = if target < 0.0 { ra > -1.0 } else { ra < 1.0 };
+                    if inside_left {
+                        s_hi = s_hi.min(s);
+                    } else {
+                        s_lo = s_lo.max(s);
+                    }
+                }
+            }
+            // A slave edge whose image only touches this master edge at an end gives no segment.
+            let inside = r_of_s(&xs, &xm, 0.5 * (s_lo + s_hi)).is_some_and(|r| r.abs() <= 1.0 + 1e-9);
+            if s_hi - s_lo > 1e-14 && inside {
+                segments.push((s_lo, s_hi, mi));
+            }
+        }
+        for (s_lo, s_hi, mi) in segments {
+            let xm = coords(&master[mi]);
+            let half = 0.5 * (s_hi - s_lo);
+            for &(gq, wq) in gauss_legendre(5) {
+                let s = s_lo + half * (gq + 1.0);
+                let (xp, n, tau, j) = frame(&xs, s);
+                let Some((r, g0)) = project_along(&xm, xp, n) else { continue };
+                let ns = lin3::n(s);
+                let nm = lin3::n(r.clamp(-1.0, 1.0));
+                let dw = wq * half * j;
+                for a in 0..3 {
+                    let e = acc.entry(se[a]).or_default();
+                    let fa = ns[a] * dw;
+                    e.w += fa;
+                    e.g0 += fa * g0;
+                    e.h = e.h.max(chord);
+                    for i in 0..3 {
+                        let v = e.g.entry(se[i]).or_insert([0.0; 2]);
+                        v[0] -= fa * ns[i] * n[0];
+                        v[1] -= fa * ns[i] * n[1];
+                        let v = e.t.entry(se[i]).or_insert([0.0; 2]);
+                        v[0] -= fa * ns[i] * tau[0];
+                        v[1] -= fa * ns[i] * tau[1];
+                    }
+                    for k in 0..3 {
+                        let v = e.g.entry(master[mi][k]).or_insert([0.0; 2]);
+                        v[0] += fa * nm[k] * n[0];
+                        v[1] += fa * nm[k] * n[1];
+                        let v = e.t.entry(master[mi][k]).or_insert([0.0; 2]);
+                        v[0] += fa * nm[k] * tau[0];
+                        v[1] += fa * nm[k] * tau[1];
+                        master_nodes.insert(master[mi][k]);
+                    }
+                }
+            }
+        }
+        // Nodal frame: normal and tangent of the edge at its nodes (averaged over edges).
+        for (a, s) in [(0usize, -1.0), (1, 1.0), (2, 0.0)] {
+            let (_, n, tau, _) = frame(&xs, s);
+            let e = acc.entry(se[a]).or_default();
+            e.n = [e.n[0] + n[0], e.n[1] + n[1]];
+            e.tau = [e.tau[0] + tau[0], e.tau[1] + tau[1]];
+        }
+    }
+    let mut m = Mortar::default();
+    let mut entries: Vec<(usize, Acc)> = acc.into_iter().filter(|(_, a)| a.w > 0.0).collect();
+    // Order along the face by the tangent direction of the first node (x for the VM272 arcs).
+    entries.sort_by(|a, b| {
+        let (pa, pb) = (x[a.0], x[b.0]);
+        let t = a.1.tau;
+        (pa[0] * t[0] + pa[1] * t[1]).partial_cmp(&(pb[0] * t[0] + pb[1] * t[1])).expect("finite")
+    });
+    for (node, a) in entries {
+        let unit = |v: [f64; 2]| {
+            let l = v[0].hypot(v[1]);
+            [v[0] / l, v[1] / l]
+        };
+        m.slave_nodes.push(node);
+        m.weight.push(a.w);
+        m.gap0.push(a.g0 / a.w);
+        m.g_rows.push(a.g.into_iter().map(|(k, v)| (k, [v[0] / a.w, v[1] / a.w])).filter(|(_, v)| v[0] != 0.0 || v[1] != 0.0).collect());
+        m.t_rows.push(a.t.into_iter().map(|(k, v)| (k, [v[0] / a.w, v[1] / a.w])).filter(|(_, v)| v[0] != 0.0 || v[1] != 0.0).collect());
+        m.normal.push(unit(a.n));
+        m.tangent.push(unit(a.tau));
+        m.h.push(a.h);
+    }
+    m.master_nodes = master_nodes.into_iter().collect();
+    m
+}

@@ -1,0 +1,431 @@
+//! The contact problem on the contact unknowns alone.
+//!
+//! The elastic bodies are condensed onto the retained DOFs `R` (contact nodes and pilot):
+//! `Ŝ u_R = g + r_R` (see [`crate::condense`]). The contact and pilot forces enter as
+//! `r_R = Yᵀ μ` with `Y = [Ĝ; T̂; E_Pᵀ]` and unknowns `μ = (F_n, F_t, z)`: nodal normal forces,
+//! nodal tangential forces on the master side, and the pilot's force plus its grounding spring
+//! force `z = r_P + k_g u_P`. Then
+//! ```text
+//!   Y u_R = w0 + W μ,   W = Y Ŝ⁻¹ Yᵀ = Zᵀ Z,   Z = L_RR⁻¹ Yᵀ,   w0 = Zᵀ L_RR⁻¹ g,
+//! ```
+//! gives every nodal gap `ĝ = g0 + (Y u_R)_n`, relative tangential displacement
+//! `v̂ = (Y u_R)_t` and the pilot displacement from `μ` alone. `W` (the Delassus operator) is
+//! dense and small and is built once per model; each Newton iteration is a dense solve on the
+//! active unknowns.
+//!
+//! Complementarity at each slave node j (forces, gaps and slips are nodal quantities):
+//! * normal: `F_n ≥ 0, ĝ ≥ 0, F_n ĝ = 0`, written `F_n − max(0, F_n − c ĝ) = 0`;
+//! * friction (Coulomb with `μ_j = f(U_j)` of the accumulated slip `U_j`): stick
+//!   (`Δv̂ = 0`) while `|F_t − c Δv̂| < μ_j (F_n − c ĝ)`, else slip with
+//!   `F_t = μ_j F_n sign(F_t − c Δv̂)` (the force on the master opposes its slip).
+//!
+//! `c = E*` (the composite plane-strain modulus) makes the complementarity functions
+//! homogeneous in force per length, so iterates do not depend on the units. In 2-D the
+//! semi-smooth Newton method on these functions is the primal–dual active-set method: each
+//! iteration fixes the sets (inactive / stick / slip) from the current iterate and solves the
+//! linear equations they imply; it has converged when the sets no longer change and the
+//! update is small. The penalty and augmented-Lagrangian methods solve the same equations with
+//! `F_n = ε max(0, −ĝ)` (and an elastic tangential spring), the latter with an outer update of
+//! the multiplier estimate until the penetration is below tolerance.
+
+use crate::friction::FrictionLaw;
+use faer::Mat;
+use faer::linalg::solvers::Solve;
+
+/// How the contact conditions are enforced.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Semi-smooth Newton (primal–dual active set) on the complementarity functions: exact.
+    Newton,
+    /// Penalty: `F_n = ε max(0, −ĝ)`, tangential spring `ε`; `ε = κ E* w_j / h_j`.
+    Penalty,
+    /// Augmented Lagrangian: penalty with an outer multiplier update (Uzawa) until the largest
+    /// penetration is below `tolerance × h`.
+    AugmentedLagrangian,
+}
+
+/// Contact state of a slave node.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    Open,
+    Stick,
+    Slip,
+}
+
+impl Status {
+    pub fn code(self) -> f64 {
+        match self {
+            Status::Open => 0.0,
+            Status::Stick => 1.0,
+            Status::Slip => 2.0,
+        }
+    }
+}
+
+/// How a pilot component is driven in a solve.
+#[derive(Clone, Copy, Debug)]
+pub enum PilotDrive {
+    Force(f64),
+    Displacement(f64),
+}
+
+/// The converged contact state after a step (and the committed history).
+#[derive(Clone, Debug)]
+pub struct State {
+    pub f_n: Vec<f64>,
+    pub f_t: Vec<f64>,
+    pub z: [f64; 2],
+    /// Relative tangential displacement v̂ (master minus slave).
+    pub v: Vec<f64>,
+    /// Accumulated slip U.
+    pub slip: Vec<f64>,
+    /// Slip increment of the last step (signed).
+    pub dv: Vec<f64>,
+    pub gap: Vec<f64>,
+    pub status: Vec<Status>,
+    pub mu: Vec<f64>,
+    /// Pilot displacement and force.
+    pub pilot_u: [f64; 2],
+    pub pilot_f: [f64; 2],
+}
+
+/// The condensed contact operator.
+pub struct ContactSystem {
+    pub ns: usize,
+    pub has_pilot: bool,
+    /// Delassus operator `W` (m × m), m = 2 ns (+ 2 with a pilot).
+    pub w: Mat<f64>,
+    /// `Z = L_RR⁻¹ Yᵀ` (n_R × m).
+    pub z: Mat<f64>,
+    /// Nodal initial gaps (including the effect of prescribed displacements).
+    pub gap0: Vec<f64>,
+    /// Constant tangential offsets from prescribed displacements.
+    pub v0: Vec<f64>,
+    /// Complementarity constant `c = E*`.
+    pub c: f64,
+    /// Per node penalty stiffness for κ = 1: `E* w_j / h_j`.
+    pub eps_unit: Vec<f64>,
+    /// Grounding springs of the pilot components.
+    pub kg: [f64; 2],
+}
+
+/// Options of a contact solve.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    pub method: Method,
+    /// Penalty factor κ (penalty and augmented Lagrangian).
+    pub kappa: f64,
+    pub max_iterations: usize,
+    /// Relative tolerance on the update of the forces (Newton), and on the penetration
+    /// relative to the element size (augmented Lagrangian).
+    pub tolerance: f64,
+}
+
+/// Result of one step solve.
+#[derive(Clone, Debug)]
+pub struct StepOutcome {
+    pub state: State,
+    pub iterations: usize,
+    /// Largest |update| / max |force| at the last iteration.
+    pub last_update: f64,
+}
+
+/// Why a step did not converge.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum ContactError {
+    #[error("the contact Newton iteration did not converge in {iterations} iterations (last relative update {update:.2e}, {changes} nodes still changing state)")]
+    NoConvergence { iterations: usize, update: f64, changes: usize },
+    #[error("the contact equations became singular: {0}")]
+    Singular(String),
+}
+
+impl ContactSystem {
+    /// `y = w0 + W μ`.
+    fn y(&self, w0: &[f64], mu: &[f64]) -> Vec<f64> {
+        let m = w0.len();
+        let mut y = w0.to_vec();
+        for (j, &mj) in mu.iter().enumerate() {
+            if mj != 0.0 {
+                let col = self.w.col(j);
+                for i in 0..m {
+                    y[i] += col[i] * mj;
+                }
+            }
+        }
+        y
+    }
+
+    fn m(&self) -> usize {
+        2 * self.ns + if self.has_pilot { 2 } else { 0 }
+    }
+
+    /// An initial state before any load: no contact force, zero slip.
+    pub fn initial_state(&self) -> State {
+        let ns = self.ns;
+        State {
+            f_n: vec![0.0; ns],
+            f_t: vec![0.0; ns],
+            z: [0.0; 2],
+            v: self.v0.clone(),
+            slip: vec![0.0; ns],
+            dv: vec![0.0; ns],
+            gap: self.gap0.clone(),
+            status: vec![Status::Open; ns],
+            mu: vec![0.0; ns],
+            pilot_u: [0.0; 2],
+            pilot_f: [0.0; 2],
+        }
+    }
+
+    /// Solves one load step from the committed state `prev`, with the condensed load `w0`
+    /// (from the bodies' loads), the pilot drive, and friction law `law` (`None`: frictionless).
+    pub fn solve_step(&self, w0: &[f64], drive: [PilotDrive; 2], law: Option<&FrictionLaw>, prev: &State, opt: &Options) -> Result<StepOutcome, ContactError> {
+        let ns = self.ns;
+        let m = self.m();
+        assert_eq!(w0.len(), m);
+        let c = self.c;
+        let eps: Vec<f64> = self.eps_unit.iter().map(|e| e * opt.kappa).collect();
+        // Unknowns μ = (F_n, F_t, z); warm start from the committed state.
+        let mut mu = vec![0.0; m];
+        mu[..ns].copy_from_slice(&prev.f_n);
+        mu[ns..2 * ns].copy_from_slice(&prev.f_t);
+        if self.has_pilot {
+            mu[2 * ns] = prev.z[0];
+            mu[2 * ns + 1] = prev.z[1];
+        }
+        // Multiplier estimates of the augmented Lagrangian.
+        let mut fbar_n = prev.f_n.clone();
+        let mut fbar_t = prev.f_t.clone();
+        let mut status: Vec<Status> = prev.status.clone();
+        // With no node in contact yet, start from the closest nodes so that the first linear
+        // system holds the body that the pilot pushes (three nodes span both sides of the
+        // first touch, which also stops a frictionless rigid sliding mode).
+        if status.iter().all(|s| *s == Status::Open) {
+            let mut order: Vec<usize> = (0..ns).collect();
+            order.sort_by(|&a, &b| self.gap0[a].partial_cmp(&self.gap0[b]).expect("finite"));
+            for &j in order.iter().take(3.min(ns)) {
+                status[j] = if law.is_some() { Status::Stick } else { Status::Slip };
+            }
+        }
+        let mut sign = vec![1.0; ns];
+        let mut last_update = f64::INFINITY;
+        let mut first = true;
+        for it in 1..=opt.max_iterations {
+            let y = self.y(w0, &mu);
+            // Sets from the current iterate (the first iteration keeps the warm-start sets).
+            let mut changes = 0;
+            if !first {
+                for j in 0..ns {
+                    let gap = self.gap0[j] + y[j];
+                    let dv = y[ns + j] - prev.v[j];
+                    let xi_n = match opt.method {
+                        Method::Newton => mu[j] - c * gap,
+                        Method::Penalty => -eps[j] * gap,
+                        Method::AugmentedLagrangian => fbar_n[j] - eps[j] * gap,
+                    };
+                    let new = if xi_n <= 0.0 {
+                        Status::Open
+                    } else if let Some(law) = law {
+                        let mu_j = law.mu(prev.slip[j] + dv.abs());
+                        let xi_t = match opt.method {
+                            Method::Newton => mu[ns + j] - c * dv,
+                            Method::Penalty => prev.f_t[j] - eps[j] * dv,
+                            Method::AugmentedLagrangian => fbar_t[j] - eps[j] * dv,
+                        };
+                        if xi_t.abs() < mu_j * xi_n {
+                            Status::Stick
+                        } else {
+                            sign[j] = xi_t.signum();
+                            Status::Slip
+                        }
+                    } else {
+                        Status::Slip
+                    };
+                    if new != status[j] {
+                        changes += 1;
+                        status[j] = new;
+                    }
+                }
+                let converged_inner = changes == 0 && last_update <= opt.tolerance;
+                if converged_inner {
+                    if opt.method == Method::AugmentedLagrangian {
+                        // Outer update: stop when the penetration is small.
+                        let pen = (0..ns)
+                            .filter(|&j| status[j] != Status::Open)
+                            .map(|j| (-(self.gap0[j] + y[j])).max(0.0) / self.eps_h(j))
+                            .fold(0.0, f64::max);
+                        if pen <= opt.tolerance {
+                            return Ok(self.finish(w0, &mu, &status, law, prev, it, last_update));
+                        }
+                        fbar_n.copy_from_slice(&mu[..ns]);
+                        fbar_t.copy_from_slice(&mu[ns..2 * ns]);
+                    } else {
+                        return Ok(self.finish(w0, &mu, &status, law, prev, it, last_update));
+                    }
+                }
+                if it == opt.max_iterations {
+                    return Err(ContactError::NoConvergence { iterations: it, update: last_update, changes });
+                }
+            }
+            first = false;
+            // Slip directions for nodes entering slip from the warm start.
+            for j in 0..ns {
+                if status[j] == Status::Slip && law.is_some() && mu[ns + j] != 0.0 && sign[j] == 0.0 {
+                    sign[j] = mu[ns + j].signum();
+                }
+            }
+            // Unknowns of this iteration.
+            let mut pos = vec![usize::MAX; m];
+            let mut unk = Vec::new();
+            for j in 0..ns {
+                if status[j] != Status::Open {
+                    pos[j] = unk.len();
+                    unk.push(j);
+                }
+            }
+            if law.is_some() {
+                for j in 0..ns {
+                    if status[j] != Status::Open {
+                        pos[ns + j] = unk.len();
+                        unk.push(ns + j);
+                    }
+                }
+            }
+            if self.has_pilot {
+                for k in 0..2 {
+                    pos[2 * ns + k] = unk.len();
+                    unk.push(2 * ns + k);
+                }
+            }
+            let nu = unk.len();
+            let mut a = Mat::<f64>::zeros(nu, nu);
+            let mut b = Mat::<f64>::zeros(nu, 1);
+            let wrow = |a: &mut Mat<f64>, r: usize, i: usize, scale: f64| {
+                for (q, &u) in unk.iter().enumerate() {
+                    a[(r, q)] += scale * self.w[(i, u)];
+                }
+            };
+            for (r, &u) in unk.iter().enumerate() {
+                if u < ns {
+                    let j = u;
+                    let rhs = -(self.gap0[j] + w0[j]);
+                    match opt.method {
+                        Method::Newton => {
+                            wrow(&mut a, r, j, 1.0);
+                            b[(r, 0)] = rhs;
+                        }
+                        Method::Penalty | Method::AugmentedLagrangian => {
+                            // F_n + ε ĝ = F̄ (F̄ = 0 for the penalty method)
+                            a[(r, r)] += 1.0;
+                            wrow(&mut a, r, j, eps[j]);
+                            let fb = if opt.method == Method::Penalty { 0.0 } else { fbar_n[j] };
+                            b[(r, 0)] = fb + eps[j] * rhs;
+                        }
+                    }
+                } else if u < 2 * ns {
+                    let j = u - ns;
+                    let vrhs = prev.v[j] - w0[u]; // Δv̂ = 0 ⇔ (W μ)_t = v_old − w0_t
+                    match status[j] {
+                        Status::Stick => match opt.method {
+                            Method::Newton => {
+                                wrow(&mut a, r, u, 1.0);
+                                b[(r, 0)] = vrhs;
+                            }
+                            Method::Penalty | Method::AugmentedLagrangian => {
+                                // F_t = F̄_t − ε Δv̂
+                                a[(r, r)] += 1.0;
+                                wrow(&mut a, r, u, eps[j]);
+                                let fb = if opt.method == Method::Penalty { prev.f_t[j] } else { fbar_t[j] };
+                                b[(r, 0)] = fb - eps[j] * (w0[u] - prev.v[j]);
+                            }
+                        },
+                        Status::Slip => {
+                            // F_t = s μ(U + |Δv̂|) F_n, linearised at the current iterate.
+                            let law = law.expect("friction");
+                            let dv_k = self.y_at(w0, &mu, u) - prev.v[j];
+                            let u_k = prev.slip[j] + dv_k.abs();
+                            let mu_k = law.mu(u_k);
+                            let dmu = law.dmu_du(u_k).unwrap_or(0.0);
+                            let s = sign[j];
+                            let fnk = mu[j];
+                            let sigma = if dv_k != 0.0 { dv_k.signum() } else { -s };
+                            a[(r, r)] += 1.0;
+                            a[(r, pos[j])] -= s * mu_k;
+                            let coef = s * fnk * dmu * sigma;
+                            if coef != 0.0 {
+                                wrow(&mut a, r, u, -coef);
+                            }
+                            b[(r, 0)] = coef * (w0[u] - prev.v[j] - dv_k);
+                        }
+                        Status::Open => unreachable!(),
+                    }
+                } else {
+                    let k = u - 2 * ns;
+                    match drive[k] {
+                        PilotDrive::Force(f) => {
+                            a[(r, r)] += 1.0;
+                            wrow(&mut a, r, u, -self.kg[k]);
+                            b[(r, 0)] = f + self.kg[k] * w0[u];
+                        }
+                        PilotDrive::Displacement(d) => {
+                            wrow(&mut a, r, u, 1.0);
+                            b[(r, 0)] = d - w0[u];
+                        }
+                    }
+                }
+            }
+            let x = a.partial_piv_lu().solve(&b);
+            if (0..nu).any(|i| !x[(i, 0)].is_finite()) {
+                return Err(ContactError::Singular(format!(
+                    "{} unknowns, {} in contact; a body may be free to move in a direction no contact or support holds",
+                    nu,
+                    status.iter().filter(|s| **s != Status::Open).count()
+                )));
+            }
+            let mut new_mu = vec![0.0; m];
+            for (q, &u) in unk.iter().enumerate() {
+                new_mu[u] = x[(q, 0)];
+            }
+            let scale = new_mu[..2 * ns].iter().fold(0.0f64, |a, v| a.max(v.abs())).max(f64::MIN_POSITIVE);
+            last_update = (0..2 * ns).map(|i| (new_mu[i] - mu[i]).abs()).fold(0.0, f64::max) / scale;
+            mu = new_mu;
+        }
+        unreachable!("the loop returns")
+    }
+
+    fn eps_h(&self, j: usize) -> f64 {
+        // Penetration tolerance scale: w_j ≈ h_j / 3 … 2h_j / 3; eps_unit = E* w/h.
+        self.eps_unit[j] / self.c * 1.0
+    }
+
+    fn y_at(&self, w0: &[f64], mu: &[f64], i: usize) -> f64 {
+        w0[i] + (0..mu.len()).map(|j| self.w[(i, j)] * mu[j]).sum::<f64>()
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn finish(&self, w0: &[f64], mu: &[f64], status: &[Status], law: Option<&FrictionLaw>, prev: &State, iterations: usize, last_update: f64) -> StepOutcome {
+        let ns = self.ns;
+        let y = self.y(w0, mu);
+        let mut st = prev.clone();
+        for j in 0..ns {
+            st.f_n[j] = mu[j];
+            st.f_t[j] = mu[ns + j];
+            st.gap[j] = self.gap0[j] + y[j];
+            st.v[j] = y[ns + j];
+            st.dv[j] = y[ns + j] - prev.v[j];
+            st.slip[j] = prev.slip[j] + if status[j] == Status::Slip { st.dv[j].abs() } else { 0.0 };
+            st.status[j] = status[j];
+            st.mu[j] = law.map_or(0.0, |l| l.mu(st.slip[j]));
+        }
+        if self.has_pilot {
+            for k in 0..2 {
+                st.z[k] = mu[2 * ns + k];
+                st.pilot_u[k] = y[2 * ns + k];
+                st.pilot_f[k] = st.z[k] - self.kg[k] * st.pilot_u[k];
+            }
+        }
+        StepOutcome { state: st, iterations, last_update }
+    }
+}
