@@ -252,10 +252,13 @@ impl Model {
         timings.analyse = t.elapsed().as_secs_f64();
         let t = Instant::now();
         // The pilot's DOFs are grounded: the body it drives may be held by nothing else.
-        let grounded: Vec<usize> = dofs
+        let mut grounded: Vec<usize> = dofs
             .pilot
             .map(|p| p.iter().map(|d| d - dofs.n_interior).collect())
             .unwrap_or_default();
+        if !retained.is_empty() {
+            grounded.extend(anchors_of_floating_bodies(&mesh, &elems, &elem_body, case.bodies.len(), &dofs, &retained));
+        }
         let condensed = Condensed::build(&k, dofs.n_interior, &grounded, &symbolic)?;
         timings.factorise = t.elapsed().as_secs_f64();
         let _ = GroupDim::Curve;
@@ -317,4 +320,80 @@ impl Model {
         }
         acc
     }
+}
+
+/// Retained DOFs (as retained indices) to ground in bodies that no support or pilot holds, so
+/// that a body held by contact alone still has a factorisable stiffness. Each such body gets
+/// three anchors on its contact nodes (both components of one node, one component of the node
+/// farthest from it), which the contact solver drives at zero force.
+fn anchors_of_floating_bodies(mesh: &Mesh, elems: &[(usize, Material)], elem_body: &[usize], nbodies: usize, dofs: &DofMap, retained: &[usize]) -> Vec<usize> {
+    use crate::dofs::Dof;
+    let mut node_body = vec![usize::MAX; mesh.nodes.len()];
+    for ((e, _), &b) in elems.iter().zip(elem_body) {
+        for &n in &mesh.triangles[*e].nodes {
+            node_body[n] = b;
+        }
+    }
+    let pilot_dof = |d: Dof| matches!((d, dofs.pilot), (Dof::Free(i), Some(p)) if p.contains(&i));
+    let mut out = Vec::new();
+    for b in 0..nbodies {
+        // Rigid modes (1,0), (0,1), (−y, x) restricted to the body's fixed DOFs: held if rank 3.
+        let mut g = [[0.0f64; 3]; 3];
+        let mut piloted = false;
+        let mut scale: f64 = 0.0;
+        for (n, &nb) in node_body.iter().enumerate() {
+            if nb != b {
+                continue;
+            }
+            let x = mesh.nodes[n];
+            scale = scale.max(x[0].abs()).max(x[1].abs());
+            for c in 0..2 {
+                let d = dofs.node[n][c];
+                if pilot_dof(d) {
+                    piloted = true;
+                }
+                if let Dof::Fixed(_) = d {
+                    let row = if c == 0 { [1.0, 0.0, -x[1]] } else { [0.0, 1.0, x[0]] };
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            g[i][j] += row[i] * row[j];
+                        }
+                    }
+                }
+            }
+        }
+        if piloted {
+            continue;
+        }
+        // Normalise the rotation column so the determinant test is scale-free.
+        let s = scale.max(f64::MIN_POSITIVE);
+        for i in 0..3 {
+            g[i][2] /= s;
+            g[2][i] /= s;
+        }
+        let det = g[0][0] * (g[1][1] * g[2][2] - g[1][2] * g[2][1]) - g[0][1] * (g[1][0] * g[2][2] - g[1][2] * g[2][0]) + g[0][2] * (g[1][0] * g[2][1] - g[1][1] * g[2][0]);
+        let tr = g[0][0] + g[1][1] + g[2][2];
+        if det > 1e-8 * tr.powi(3) {
+            continue;
+        }
+        let nodes: Vec<usize> = retained.iter().copied().filter(|&n| node_body[n] == b).collect();
+        let free = |n: usize, c: usize| match dofs.node[n][c] {
+            Dof::Free(i) if i >= dofs.n_interior => Some(i - dofs.n_interior),
+            _ => None,
+        };
+        let Some(&a) = nodes.iter().find(|&&n| free(n, 0).is_some() && free(n, 1).is_some()) else { continue };
+        let xa = mesh.nodes[a];
+        let far = nodes.iter().copied().max_by(|&p, &q| {
+            let d = |n: usize| (mesh.nodes[n][0] - xa[0]).hypot(mesh.nodes[n][1] - xa[1]);
+            d(p).partial_cmp(&d(q)).expect("finite")
+        });
+        out.extend(free(a, 0));
+        out.extend(free(a, 1));
+        if let Some(f) = far.filter(|&f| f != a) {
+            let xf = mesh.nodes[f];
+            let c = if (xf[0] - xa[0]).abs() >= (xf[1] - xa[1]).abs() { 1 } else { 0 };
+            out.extend(free(f, c));
+        }
+    }
+    out
 }

@@ -196,7 +196,7 @@ impl ContactModel {
         let n_i = dofs.n_interior;
         let n_r = dofs.n_retained;
         let has_pilot = dofs.pilot.is_some();
-        let m = 2 * ns + if has_pilot { 2 } else { 0 };
+        let m = 2 * ns + cond.grounding.len();
         let mut gap0 = m0.gap0.clone();
         let mut v0 = vec![0.0; ns];
         let mut y_rows = Vec::with_capacity(m);
@@ -221,10 +221,9 @@ impl ContactModel {
             let r = to_r(&m0.t_rows[j], &mut v0[j]);
             y_rows.push(r);
         }
-        if let Some(p) = dofs.pilot {
-            for c in 0..2 {
-                y_rows.push(vec![(p[c] - n_i, 1.0)]);
-            }
+        // Anchors: every grounded retained DOF (the pilot's first).
+        for &(r, _) in &cond.grounding {
+            y_rows.push(vec![(r, 1.0)]);
         }
         // Z = L_RR⁻¹ Yᵀ, W = Zᵀ Z.
         let mut z = faer::Mat::<f64>::zeros(n_r, m);
@@ -237,16 +236,7 @@ impl ContactModel {
         faer::linalg::triangular_solve::solve_lower_triangular_in_place(cond.chol.l_rr(), z.as_mut(), par);
         let mut w = faer::Mat::<f64>::zeros(m, m);
         faer::linalg::matmul::matmul(w.as_mut(), faer::Accum::Replace, z.transpose(), z.as_ref(), 1.0, par);
-        let mut kg = [0.0; 2];
-        if let Some(p) = dofs.pilot {
-            for &(r, k) in &cond.grounding {
-                for c in 0..2 {
-                    if r == p[c] - n_i {
-                        kg[c] = k;
-                    }
-                }
-            }
-        }
+        let kg: Vec<f64> = cond.grounding.iter().map(|g| g.1).collect();
         let eps_unit = (0..ns).map(|j| e_star * m0.weight[j] / m0.h[j]).collect();
         let mut master_dof = vec![false; n_r];
         for &node in &m0.master_nodes {

@@ -49,6 +49,7 @@ pub struct Mortar {
 /// Projects `x` along direction `n` onto the quadratic edge `xm`: returns `(r, g)` with
 /// `xm(r) = x + g n`; `r` may lie outside [−1, 1] (the edge's quadratic extension).
 pub fn project_along(xm: &[[f64; 2]; 3], x: [f64; 2], n: [f64; 2]) -> Option<(f64, f64)> {
+    let size = (xm[0][0] - xm[1][0]).hypot(xm[0][1] - xm[1][1]);
     let mut r = 0.0;
     let p = lin3::point(xm, 0.0);
     let mut g = (p[0] - x[0]) * n[0] + (p[1] - x[1]) * n[1];
@@ -56,6 +57,10 @@ pub fn project_along(xm: &[[f64; 2]; 3], x: [f64; 2], n: [f64; 2]) -> Option<(f6
         let p = lin3::point(xm, r);
         let t = lin3::tangent(xm, r);
         let f = [p[0] - x[0] - g * n[0], p[1] - x[1] - g * n[1]];
+        // Converged when the two curves meet to round-off of the coordinates.
+        if f[0].hypot(f[1]) <= 1e-12 * (size + x[0].abs() + x[1].abs()) {
+            return Some((r, g));
+        }
         // J = [t, −n]
         let det = t[0] * (-n[1]) - (-n[0]) * t[1];
         if det.abs() < 1e-300 {
@@ -65,14 +70,11 @@ pub fn project_along(xm: &[[f64; 2]; 3], x: [f64; 2], n: [f64; 2]) -> Option<(f6
         let dg = (t[0] * f[1] - t[1] * f[0]) / det;
         r -= dr;
         g -= dg;
-        if dr.abs() < 1e-14 * (1.0 + r.abs()) {
-            return Some((r, g));
-        }
         if !r.is_finite() || r.abs() > 1e3 {
             return None;
         }
     }
-    Some((r, g))
+    None
 }
 
 /// Position, unit outward normal, unit tangent and length element of a slave edge at `s`.

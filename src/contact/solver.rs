@@ -76,7 +76,8 @@ pub enum PilotDrive {
 pub struct State {
     pub f_n: Vec<f64>,
     pub f_t: Vec<f64>,
-    pub z: [f64; 2],
+    /// Anchor unknowns: force on each grounded DOF plus its spring force (pilot first).
+    pub z: Vec<f64>,
     /// Relative tangential displacement v̂ (master minus slave).
     pub v: Vec<f64>,
     /// Accumulated slip U.
@@ -94,6 +95,7 @@ pub struct State {
 /// The condensed contact operator.
 pub struct ContactSystem {
     pub ns: usize,
+    /// Whether the first two anchors are the pilot's (x, y) DOFs.
     pub has_pilot: bool,
     /// Delassus operator `W` (m × m), m = 2 ns (+ 2 with a pilot).
     pub w: Mat<f64>,
@@ -107,8 +109,9 @@ pub struct ContactSystem {
     pub c: f64,
     /// Per node penalty stiffness for κ = 1: `E* w_j / h_j`.
     pub eps_unit: Vec<f64>,
-    /// Grounding springs of the pilot components.
-    pub kg: [f64; 2],
+    /// Grounding springs of the anchors: the pilot's DOFs, then DOFs of bodies held by contact
+    /// alone (driven at zero force).
+    pub kg: Vec<f64>,
 }
 
 /// Options of a contact solve.
@@ -158,7 +161,7 @@ impl ContactSystem {
     }
 
     fn m(&self) -> usize {
-        2 * self.ns + if self.has_pilot { 2 } else { 0 }
+        2 * self.ns + self.kg.len()
     }
 
     /// An initial state before any load: no contact force, zero slip.
@@ -167,7 +170,7 @@ impl ContactSystem {
         State {
             f_n: vec![0.0; ns],
             f_t: vec![0.0; ns],
-            z: [0.0; 2],
+            z: vec![0.0; self.kg.len()],
             v: self.v0.clone(),
             slip: vec![0.0; ns],
             dv: vec![0.0; ns],
@@ -191,10 +194,7 @@ impl ContactSystem {
         let mut mu = vec![0.0; m];
         mu[..ns].copy_from_slice(&prev.f_n);
         mu[ns..2 * ns].copy_from_slice(&prev.f_t);
-        if self.has_pilot {
-            mu[2 * ns] = prev.z[0];
-            mu[2 * ns + 1] = prev.z[1];
-        }
+        mu[2 * ns..].copy_from_slice(&prev.z);
         // Multiplier estimates of the augmented Lagrangian.
         let mut fbar_n = prev.f_n.clone();
         let mut fbar_t = prev.f_t.clone();
@@ -293,11 +293,9 @@ impl ContactSystem {
                     }
                 }
             }
-            if self.has_pilot {
-                for k in 0..2 {
-                    pos[2 * ns + k] = unk.len();
-                    unk.push(2 * ns + k);
-                }
+            for k in 0..self.kg.len() {
+                pos[2 * ns + k] = unk.len();
+                unk.push(2 * ns + k);
             }
             let nu = unk.len();
             let mut a = Mat::<f64>::zeros(nu, nu);
@@ -363,7 +361,8 @@ impl ContactSystem {
                     }
                 } else {
                     let k = u - 2 * ns;
-                    match drive[k] {
+                    let d = if self.has_pilot && k < 2 { drive[k] } else { PilotDrive::Force(0.0) };
+                    match d {
                         PilotDrive::Force(f) => {
                             a[(r, r)] += 1.0;
                             wrow(&mut a, r, u, -self.kg[k]);
@@ -419,9 +418,11 @@ impl ContactSystem {
             st.status[j] = status[j];
             st.mu[j] = law.map_or(0.0, |l| l.mu(st.slip[j]));
         }
+        for k in 0..self.kg.len() {
+            st.z[k] = mu[2 * ns + k];
+        }
         if self.has_pilot {
             for k in 0..2 {
-                st.z[k] = mu[2 * ns + k];
                 st.pilot_u[k] = y[2 * ns + k];
                 st.pilot_f[k] = st.z[k] - self.kg[k] * st.pilot_u[k];
             }
