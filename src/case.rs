@@ -96,12 +96,26 @@ pub struct ContactSpec {
     /// reaches the edge of the zone).
     #[serde(default)]
     pub candidate_gap: Option<f64>,
+    /// `common` (default): gaps and forces along one normal for the pair, the slave normal at
+    /// the first touch — the classical small-strain theory of two curved bodies; `local`: each
+    /// slave point's own normal.
+    #[serde(default)]
+    pub normal: NormalKind,
     /// Newton iterations per step before the step is cut back (default 60).
     #[serde(default)]
     pub max_iterations: Option<usize>,
     /// Relative tolerance of the contact iteration (default 1e-10).
     #[serde(default)]
     pub tolerance: Option<f64>,
+}
+
+/// How the contact normal is chosen.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(rename_all = "snake_case")]
+pub enum NormalKind {
+    #[default]
+    Common,
+    Local,
 }
 
 fn default_method() -> crate::contact::solver::Method {
@@ -393,18 +407,34 @@ impl Case {
         }
         if let Some(c) = &self.contact {
             if c.slave == c.master {
-                return Err(bad("contact.master".into(), c.master.clone(), "must differ from `contact.slave`"));
+                return Err(bad(
+                    "contact.master".into(),
+                    c.master.clone(),
+                    "must differ from `contact.slave`",
+                ));
             }
-            for (k, v) in [("penalty", c.penalty), ("candidate_gap", c.candidate_gap), ("tolerance", c.tolerance)] {
+            for (k, v) in [
+                ("penalty", c.penalty),
+                ("candidate_gap", c.candidate_gap),
+                ("tolerance", c.tolerance),
+            ] {
                 if let Some(v) = v {
                     if !(v > 0.0 && v.is_finite()) {
-                        return Err(bad(format!("contact.{k}"), format!("{v}"), "must be > 0 and finite"));
+                        return Err(bad(
+                            format!("contact.{k}"),
+                            format!("{v}"),
+                            "must be > 0 and finite",
+                        ));
                     }
                 }
             }
             if let Some(n) = c.max_iterations {
                 if n == 0 || n > 10_000 {
-                    return Err(bad("contact.max_iterations".into(), format!("{n}"), "must be between 1 and 10000"));
+                    return Err(bad(
+                        "contact.max_iterations".into(),
+                        format!("{n}"),
+                        "must be between 1 and 10000",
+                    ));
                 }
             }
         }

@@ -87,7 +87,11 @@ impl Model {
     }
 
     /// As [`Model::build`], overriding the contact candidate gap.
-    pub fn build_with_gap(case: &Case, case_path: &std::path::Path, gap: Option<f64>) -> Result<Model, ModelError> {
+    pub fn build_with_gap(
+        case: &Case,
+        case_path: &std::path::Path,
+        gap: Option<f64>,
+    ) -> Result<Model, ModelError> {
         let t0 = Instant::now();
         let mesh = crate::mesh::gmsh::read(&case.mesh_path(case_path))?;
         let mut timings = Timings {
@@ -98,7 +102,12 @@ impl Model {
     }
 
     /// Builds the model on an already read mesh (`gap` overrides the contact candidate gap).
-    pub fn from_mesh(case: &Case, mesh: Mesh, timings: &mut Timings, gap: Option<f64>) -> Result<Model, ModelError> {
+    pub fn from_mesh(
+        case: &Case,
+        mesh: Mesh,
+        timings: &mut Timings,
+        gap: Option<f64>,
+    ) -> Result<Model, ModelError> {
         let path = mesh.source.display().to_string();
         let bodies: Vec<&str> = case.bodies.iter().map(|b| b.group.as_str()).collect();
         let mut curves: Vec<&str> = case.supports.iter().map(|s| s.group.as_str()).collect();
@@ -150,11 +159,29 @@ impl Model {
         let pair = match &case.contact {
             None => None,
             Some(cs) => {
-                let perr = |source| ModelError::Contact { path: path.clone(), source };
-                let slave = crate::contact::oriented_edges(&mesh, &orient, &cs.slave).map_err(perr)?;
-                let master = crate::contact::oriented_edges(&mesh, &orient, &cs.master).map_err(perr)?;
-                let g = gap.or(cs.candidate_gap).unwrap_or_else(|| crate::contact::default_candidate_gap(&mesh, &slave));
-                Some(crate::contact::build_pair(&mesh, &cs.slave, &cs.master, &slave, &master, g).map_err(perr)?)
+                let perr = |source| ModelError::Contact {
+                    path: path.clone(),
+                    source,
+                };
+                let slave =
+                    crate::contact::oriented_edges(&mesh, &orient, &cs.slave).map_err(perr)?;
+                let master =
+                    crate::contact::oriented_edges(&mesh, &orient, &cs.master).map_err(perr)?;
+                let g = gap
+                    .or(cs.candidate_gap)
+                    .unwrap_or_else(|| crate::contact::default_candidate_gap(&mesh, &slave));
+                Some(
+                    crate::contact::build_pair(
+                        &mesh,
+                        &cs.slave,
+                        &cs.master,
+                        &slave,
+                        &master,
+                        g,
+                        cs.normal == crate::case::NormalKind::Common,
+                    )
+                    .map_err(perr)?,
+                )
             }
         };
         let mut retained: Vec<usize> = Vec::new();
@@ -166,11 +193,18 @@ impl Model {
             retained.retain(|n| seen.insert(*n));
         }
         let e_star = pair.as_ref().map(|p| {
-            let body_of = |e: &[usize; 3]| orient.edge_triangle(e[0], e[1]).map(|t| tri_body[t]).expect("oriented edge");
+            let body_of = |e: &[usize; 3]| {
+                orient
+                    .edge_triangle(e[0], e[1])
+                    .map(|t| tri_body[t])
+                    .expect("oriented edge")
+            };
             let mb = p.mortar.master_nodes.first().and_then(|_| {
                 // The master body: the triangle adjacent to any master edge of the case group.
                 let cs = case.contact.as_ref().expect("pair implies contact");
-                crate::contact::oriented_edges(&mesh, &orient, &cs.master).ok().and_then(|v| v.first().map(body_of))
+                crate::contact::oriented_edges(&mesh, &orient, &cs.master)
+                    .ok()
+                    .and_then(|v| v.first().map(body_of))
             });
             let sb = body_of(&p.zone_edges[0]);
             let inv = |b: usize| (1.0 - case.bodies[b].nu.powi(2)) / case.bodies[b].e;
@@ -257,15 +291,27 @@ impl Model {
             .map(|p| p.iter().map(|d| d - dofs.n_interior).collect())
             .unwrap_or_default();
         if !retained.is_empty() {
-            grounded.extend(anchors_of_floating_bodies(&mesh, &elems, &elem_body, case.bodies.len(), &dofs, &retained));
+            grounded.extend(anchors_of_floating_bodies(
+                &mesh,
+                &elems,
+                &elem_body,
+                case.bodies.len(),
+                &dofs,
+                &retained,
+            ));
         }
         let condensed = Condensed::build(&k, dofs.n_interior, &grounded, &symbolic)?;
         timings.factorise = t.elapsed().as_secs_f64();
         let _ = GroupDim::Curve;
         let t = Instant::now();
-        let contact = pair.map(|p| crate::contact::ContactModel::new(p, &dofs, &condensed, e_star.expect("with pair")));
+        let contact = pair.map(|p| {
+            crate::contact::ContactModel::new(p, &dofs, &condensed, e_star.expect("with pair"))
+        });
         let contact_w0 = match &contact {
-            Some(c) => [c.w0(&condensed, &condensed.reduce(&f_traction)), c.w0(&condensed, &condensed.reduce(&f_prescribed))],
+            Some(c) => [
+                c.w0(&condensed, &condensed.reduce(&f_traction)),
+                c.w0(&condensed, &condensed.reduce(&f_prescribed)),
+            ],
             None => [Vec::new(), Vec::new()],
         };
         timings.condense = t.elapsed().as_secs_f64();
@@ -326,7 +372,14 @@ impl Model {
 /// that a body held by contact alone still has a factorisable stiffness. Each such body gets
 /// three anchors on its contact nodes (both components of one node, one component of the node
 /// farthest from it), which the contact solver drives at zero force.
-fn anchors_of_floating_bodies(mesh: &Mesh, elems: &[(usize, Material)], elem_body: &[usize], nbodies: usize, dofs: &DofMap, retained: &[usize]) -> Vec<usize> {
+fn anchors_of_floating_bodies(
+    mesh: &Mesh,
+    elems: &[(usize, Material)],
+    elem_body: &[usize],
+    nbodies: usize,
+    dofs: &DofMap,
+    retained: &[usize],
+) -> Vec<usize> {
     use crate::dofs::Dof;
     let mut node_body = vec![usize::MAX; mesh.nodes.len()];
     for ((e, _), &b) in elems.iter().zip(elem_body) {
@@ -353,7 +406,11 @@ fn anchors_of_floating_bodies(mesh: &Mesh, elems: &[(usize, Material)], elem_bod
                     piloted = true;
                 }
                 if let Dof::Fixed(_) = d {
-                    let row = if c == 0 { [1.0, 0.0, -x[1]] } else { [0.0, 1.0, x[0]] };
+                    let row = if c == 0 {
+                        [1.0, 0.0, -x[1]]
+                    } else {
+                        [0.0, 1.0, x[0]]
+                    };
                     for i in 0..3 {
                         for j in 0..3 {
                             g[i][j] += row[i] * row[j];
@@ -371,17 +428,28 @@ fn anchors_of_floating_bodies(mesh: &Mesh, elems: &[(usize, Material)], elem_bod
             g[i][2] /= s;
             g[2][i] /= s;
         }
-        let det = g[0][0] * (g[1][1] * g[2][2] - g[1][2] * g[2][1]) - g[0][1] * (g[1][0] * g[2][2] - g[1][2] * g[2][0]) + g[0][2] * (g[1][0] * g[2][1] - g[1][1] * g[2][0]);
+        let det = g[0][0] * (g[1][1] * g[2][2] - g[1][2] * g[2][1])
+            - g[0][1] * (g[1][0] * g[2][2] - g[1][2] * g[2][0])
+            + g[0][2] * (g[1][0] * g[2][1] - g[1][1] * g[2][0]);
         let tr = g[0][0] + g[1][1] + g[2][2];
         if det > 1e-8 * tr.powi(3) {
             continue;
         }
-        let nodes: Vec<usize> = retained.iter().copied().filter(|&n| node_body[n] == b).collect();
+        let nodes: Vec<usize> = retained
+            .iter()
+            .copied()
+            .filter(|&n| node_body[n] == b)
+            .collect();
         let free = |n: usize, c: usize| match dofs.node[n][c] {
             Dof::Free(i) if i >= dofs.n_interior => Some(i - dofs.n_interior),
             _ => None,
         };
-        let Some(&a) = nodes.iter().find(|&&n| free(n, 0).is_some() && free(n, 1).is_some()) else { continue };
+        let Some(&a) = nodes
+            .iter()
+            .find(|&&n| free(n, 0).is_some() && free(n, 1).is_some())
+        else {
+            continue;
+        };
         let xa = mesh.nodes[a];
         let far = nodes.iter().copied().max_by(|&p, &q| {
             let d = |n: usize| (mesh.nodes[n][0] - xa[0]).hypot(mesh.nodes[n][1] - xa[1]);
@@ -391,7 +459,11 @@ fn anchors_of_floating_bodies(mesh: &Mesh, elems: &[(usize, Material)], elem_bod
         out.extend(free(a, 1));
         if let Some(f) = far.filter(|&f| f != a) {
             let xf = mesh.nodes[f];
-            let c = if (xf[0] - xa[0]).abs() >= (xf[1] - xa[1]).abs() { 1 } else { 0 };
+            let c = if (xf[0] - xa[0]).abs() >= (xf[1] - xa[1]).abs() {
+                1
+            } else {
+                0
+            };
             out.extend(free(f, c));
         }
     }

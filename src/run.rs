@@ -19,8 +19,13 @@ pub enum RunError {
     #[error("{0}")]
     Solve(String),
     #[error("cannot write output `{path}`: {source}")]
-    Write { path: String, source: std::io::Error },
-    #[error("the contact reached the edge of the candidate zone (candidate gap {gap:e}) at step {step}")]
+    Write {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error(
+        "the contact reached the edge of the candidate zone (candidate gap {gap:e}) at step {step}"
+    )]
     ZoneClipped { gap: f64, step: usize },
 }
 
@@ -28,8 +33,18 @@ impl RunError {
     /// Process exit status: 2 for bad input, 3 for a solver failure, 4 for output errors.
     pub fn exit_code(&self) -> i32 {
         match self {
-            RunError::Case(_) | RunError::Model(ModelError::MeshRead(_) | ModelError::MeshCheck(_) | ModelError::Dof { .. } | ModelError::Edge { .. } | ModelError::Contact { .. } | ModelError::Unsupported(_)) => 2,
-            RunError::Model(ModelError::Factor(_)) | RunError::Solve(_) | RunError::ZoneClipped { .. } => 3,
+            RunError::Case(_)
+            | RunError::Model(
+                ModelError::MeshRead(_)
+                | ModelError::MeshCheck(_)
+                | ModelError::Dof { .. }
+                | ModelError::Edge { .. }
+                | ModelError::Contact { .. }
+                | ModelError::Unsupported(_),
+            ) => 2,
+            RunError::Model(ModelError::Factor(_))
+            | RunError::Solve(_)
+            | RunError::ZoneClipped { .. } => 3,
             RunError::Write { .. } => 4,
         }
     }
@@ -115,7 +130,11 @@ pub struct Summary {
 impl Model {
     /// Solves one load step without contact: tractions at `scale`, the pilot driven by
     /// `control`. Returns the free solution vector and the pilot state (if there is a pilot).
-    pub fn solve_step(&self, scale: f64, control: [Control; 2]) -> Result<(Vec<f64>, Option<PilotState>), String> {
+    pub fn solve_step(
+        &self,
+        scale: f64,
+        control: [Control; 2],
+    ) -> Result<(Vec<f64>, Option<PilotState>), String> {
         let f = self.load(scale);
         let cond = &self.condensed;
         if self.dofs.pilot.is_none() {
@@ -123,18 +142,41 @@ impl Model {
         }
         let g = cond.reduce(&f);
         let (u, r) = solve_pilot(&cond.s_dense(), &g, control, cond.krr_scale)?;
-        Ok((cond.recover(&f, &r, &u), Some(PilotState { ux: u[0], uy: u[1], fx: r[0], fy: r[1] })))
+        Ok((
+            cond.recover(&f, &r, &u),
+            Some(PilotState {
+                ux: u[0],
+                uy: u[1],
+                fx: r[0],
+                fy: r[1],
+            }),
+        ))
     }
 
     /// The free load vector at traction scale `scale`.
     pub fn load(&self, scale: f64) -> Vec<f64> {
-        self.f_traction.iter().zip(&self.f_prescribed).map(|(a, b)| scale * a + b).collect()
+        self.f_traction
+            .iter()
+            .zip(&self.f_prescribed)
+            .map(|(a, b)| scale * a + b)
+            .collect()
     }
 
     /// Solves one load step with contact from the committed state `prev`.
-    pub fn solve_contact_step(&self, scale: f64, control: [Control; 2], prev: &State, opt: &solver::Options, law: Option<&crate::friction::FrictionLaw>) -> Result<(Vec<f64>, solver::StepOutcome), ContactError> {
+    pub fn solve_contact_step(
+        &self,
+        scale: f64,
+        control: [Control; 2],
+        prev: &State,
+        opt: &solver::Options,
+        law: Option<&crate::friction::FrictionLaw>,
+    ) -> Result<(Vec<f64>, solver::StepOutcome), ContactError> {
         let cm = self.contact.as_ref().expect("contact model");
-        let w0: Vec<f64> = self.contact_w0[0].iter().zip(&self.contact_w0[1]).map(|(a, b)| scale * a + b).collect();
+        let w0: Vec<f64> = self.contact_w0[0]
+            .iter()
+            .zip(&self.contact_w0[1])
+            .map(|(a, b)| scale * a + b)
+            .collect();
         let drive = control.map(|c| match c {
             Control::Force(f) => PilotDrive::Force(f),
             Control::Displacement(d) => PilotDrive::Displacement(d),
@@ -146,12 +188,22 @@ impl Model {
     }
 
     /// Contact figures of a state.
-    pub fn contact_figures(&self, st: &State, law: Option<&crate::friction::FrictionLaw>) -> ContactFigures {
+    pub fn contact_figures(
+        &self,
+        st: &State,
+        law: Option<&crate::friction::FrictionLaw>,
+    ) -> ContactFigures {
         let cm = self.contact.as_ref().expect("contact model");
         let m = &cm.pair.mortar;
-        let xs: Vec<f64> = m.slave_nodes.iter().map(|&n| self.mesh.nodes[n][0]).collect();
+        let xs: Vec<f64> = m
+            .slave_nodes
+            .iter()
+            .map(|&n| self.mesh.nodes[n][0])
+            .collect();
         let p: Vec<f64> = (0..xs.len()).map(|j| st.f_n[j] / m.weight[j]).collect();
-        let on: Vec<usize> = (0..xs.len()).filter(|&j| st.status[j] != Status::Open).collect();
+        let on: Vec<usize> = (0..xs.len())
+            .filter(|&j| st.status[j] != Status::Open)
+            .collect();
         let mut fig = ContactFigures {
             n_contact: on.len(),
             n_stick: st.status.iter().filter(|s| **s == Status::Stick).count(),
@@ -180,16 +232,24 @@ impl Model {
             let dx = xs[j1] - xs[j2];
             if b > a && dx != 0.0 {
                 {
-                // at most one node spacing beyond the last contact node
-                let ext = a / (b - a) * dx;
-                xs[j1] + if dx > 0.0 { ext.min(dx) } else { ext.max(dx) }
-            }
+                    // at most one node spacing beyond the last contact node
+                    let ext = a / (b - a) * dx;
+                    xs[j1] + if dx > 0.0 { ext.min(dx) } else { ext.max(dx) }
+                }
             } else {
                 xs[j1]
             }
         };
-        let left = if lo + 1 <= hi { edge(lo, lo + 1) } else { xs[lo] };
-        let right = if hi >= lo + 1 { edge(hi, hi - 1) } else { xs[hi] };
+        let left = if lo + 1 <= hi {
+            edge(lo, lo + 1)
+        } else {
+            xs[lo]
+        };
+        let right = if hi >= lo + 1 {
+            edge(hi, hi - 1)
+        } else {
+            xs[hi]
+        };
         fig.a = 0.5 * (right - left);
         fig.x_centre = 0.5 * (right + left);
         let half_width = |pred: &dyn Fn(usize) -> bool| -> f64 {
@@ -198,8 +258,16 @@ impl Model {
                 return 0.0;
             }
             let (a, b) = (idx[0], *idx.last().expect("non-empty"));
-            let l = if a > 0 { 0.5 * (xs[a] + xs[a - 1]) } else { xs[a] };
-            let r = if b + 1 < xs.len() { 0.5 * (xs[b] + xs[b + 1]) } else { xs[b] };
+            let l = if a > 0 {
+                0.5 * (xs[a] + xs[a - 1])
+            } else {
+                xs[a]
+            };
+            let r = if b + 1 < xs.len() {
+                0.5 * (xs[b] + xs[b + 1])
+            } else {
+                xs[b]
+            };
             0.5 * (r - l)
         };
         fig.c = half_width(&|j| st.status[j] == Status::Stick);
@@ -208,7 +276,9 @@ impl Model {
                 let fs = law.f_static();
                 if fs > fd {
                     let tol = 1e-9 * (fs - fd);
-                    fig.b = half_width(&|j| st.status[j] != Status::Open && law.mu(st.slip[j]) > fd + tol);
+                    fig.b = half_width(&|j| {
+                        st.status[j] != Status::Open && law.mu(st.slip[j]) > fd + tol
+                    });
                 }
             }
         }
@@ -219,7 +289,12 @@ impl Model {
 /// Solves `S u = g + r` on the pilot DOFs with, per component, either the force `r` or the
 /// displacement `u` given. Returns (u, r). `scale` is the stiffness scale of the pilot
 /// before condensation: a pivot below 1e-10 of it means nothing holds the pilot.
-pub fn solve_pilot(s: &[f64], g: &[f64], control: [Control; 2], scale: f64) -> Result<([f64; 2], [f64; 2]), String> {
+pub fn solve_pilot(
+    s: &[f64],
+    g: &[f64],
+    control: [Control; 2],
+    scale: f64,
+) -> Result<([f64; 2], [f64; 2]), String> {
     let mut u = [0.0; 2];
     let mut r = [0.0; 2];
     let mut free = Vec::new();
@@ -235,7 +310,13 @@ pub fn solve_pilot(s: &[f64], g: &[f64], control: [Control; 2], scale: f64) -> R
     // S_FF u_F = g_F + r_F − S_FD u_D
     let rhs: Vec<f64> = free
         .iter()
-        .map(|&i| g[i] + r[i] - (0..2).filter(|j| !free.contains(j)).map(|j| s[i * 2 + j] * u[j]).sum::<f64>())
+        .map(|&i| {
+            g[i] + r[i]
+                - (0..2)
+                    .filter(|j| !free.contains(j))
+                    .map(|j| s[i * 2 + j] * u[j])
+                    .sum::<f64>()
+        })
         .collect();
     match free.len() {
         1 => {
@@ -272,23 +353,36 @@ fn singular() -> String {
 /// starts again.
 pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
     let case = Case::load(case_path)?;
-    let out_dir = opts.out.clone().or(case.output.dir.clone()).unwrap_or_else(|| {
-        PathBuf::from("out").join(case_path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or("case".into()))
-    });
+    let out_dir = opts
+        .out
+        .clone()
+        .or(case.output.dir.clone())
+        .unwrap_or_else(|| {
+            PathBuf::from("out").join(
+                case_path
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().to_string())
+                    .unwrap_or("case".into()),
+            )
+        });
     let mut gap = None;
     for _ in 0..8 {
         let model = Model::build_with_gap(&case, case_path, gap)?;
         match run_model(&case, case_path, model, &out_dir, opts) {
             Err(RunError::ZoneClipped { gap: g, step }) => {
                 if !opts.quiet {
-                    eprintln!("note: the contact reached the edge of the candidate zone at step {step} (candidate gap {g:.3e}); doubling the zone and starting again");
+                    eprintln!(
+                        "note: the contact reached the edge of the candidate zone at step {step} (candidate gap {g:.3e}); doubling the zone and starting again"
+                    );
                 }
                 gap = Some(2.0 * g);
             }
             other => return other,
         }
     }
-    Err(RunError::Solve("the contact zone kept growing: check the loads and the candidate gap".into()))
+    Err(RunError::Solve(
+        "the contact zone kept growing: check the loads and the candidate gap".into(),
+    ))
 }
 
 fn wr(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
@@ -299,12 +393,21 @@ fn wr(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
 }
 
 /// Steps through the stages of a built model, writing output to `out_dir`.
-pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
+pub fn run_model(
+    case: &Case,
+    case_path: &Path,
+    mut model: Model,
+    out_dir: &Path,
+    opts: &RunOptions,
+) -> Result<Summary, RunError> {
     std::fs::create_dir_all(out_dir).map_err(|source| RunError::Write {
         path: out_dir.display().to_string(),
         source,
     })?;
-    let stem = case_path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or("case".into());
+    let stem = case_path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or("case".into());
     let has_pilot = model.dofs.pilot.is_some();
     let law = case.contact.as_ref().and_then(|c| c.friction.clone());
     let copt = case.contact.as_ref().map(|c| solver::Options {
@@ -343,7 +446,9 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
             for c in 0..2 {
                 ctl[c] = match (target[c], start.2[c]) {
                     (Some(Control::Force(f)), _) => Control::Force(r0[c] + a_new * (f - r0[c])),
-                    (Some(Control::Displacement(d)), _) => Control::Displacement(u0[c] + a_new * (d - u0[c])),
+                    (Some(Control::Displacement(d)), _) => {
+                        Control::Displacement(u0[c] + a_new * (d - u0[c]))
+                    }
                     (None, Control::Force(_)) => Control::Force(r0[c]),
                     (None, Control::Displacement(_)) => Control::Displacement(u0[c]),
                 };
@@ -354,14 +459,30 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
                 t_contact += tc.elapsed().as_secs_f64();
                 match res {
                     Ok((u, out)) => {
-                        let p = PilotState { ux: out.state.pilot_u[0], uy: out.state.pilot_u[1], fx: out.state.pilot_f[0], fy: out.state.pilot_f[1] };
+                        let p = PilotState {
+                            ux: out.state.pilot_u[0],
+                            uy: out.state.pilot_u[1],
+                            fx: out.state.pilot_f[0],
+                            fy: out.state.pilot_f[1],
+                        };
                         let it = out.iterations;
                         newton_total += it;
                         // Clipping: contact on the rim of the candidate zone.
                         let cm = model.contact.as_ref().expect("contact");
-                        let rim = cm.pair.mortar.slave_nodes.iter().zip(&out.state.status).any(|(n, s)| *s != Status::Open && cm.pair.rim_nodes.binary_search(n).is_ok());
+                        let rim = cm
+                            .pair
+                            .mortar
+                            .slave_nodes
+                            .iter()
+                            .zip(&out.state.status)
+                            .any(|(n, s)| {
+                                *s != Status::Open && cm.pair.rim_nodes.binary_search(n).is_ok()
+                            });
                         if rim {
-                            return Err(RunError::ZoneClipped { gap: cm.pair.candidate_gap, step: step + 1 });
+                            return Err(RunError::ZoneClipped {
+                                gap: cm.pair.candidate_gap,
+                                step: step + 1,
+                            });
                         }
                         cstate = Some(out.state);
                         (u, has_pilot.then_some(p), it)
@@ -371,11 +492,17 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
                             cutbacks += 1;
                             dalpha *= 0.5;
                             if !opts.quiet {
-                                eprintln!("step {} of stage {si}: {e}; cutting the load increment back to {dalpha:.3e} of the stage", step + 1);
+                                eprintln!(
+                                    "step {} of stage {si}: {e}; cutting the load increment back to {dalpha:.3e} of the stage",
+                                    step + 1
+                                );
                             }
                             continue;
                         }
-                        failure = Some(format!("step {}: {e} (after {MAX_CUTBACKS} cutbacks)", step + 1));
+                        failure = Some(format!(
+                            "step {}: {e} (after {MAX_CUTBACKS} cutbacks)",
+                            step + 1
+                        ));
                         break 'stages;
                     }
                 }
@@ -401,7 +528,9 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
             step += 1;
             let wall = t.elapsed().as_secs_f64();
             t_solve += wall;
-            let figures = cstate.as_ref().map(|st| model.contact_figures(st, law.as_ref()));
+            let figures = cstate
+                .as_ref()
+                .map(|st| model.contact_figures(st, law.as_ref()));
             let time = si as f64 + alpha;
             records.push(StepRecord {
                 step,
@@ -418,17 +547,37 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
             if case.output.vtu && (step % case.output.every == 0 || last) {
                 let t = Instant::now();
                 let name = format!("{stem}_{step:04}.vtu");
-                let bytes = bodies_vtu(&model, &u, case).map_err(|e| RunError::Write { path: name.clone(), source: std::io::Error::other(e.to_string()) })?;
+                let bytes = bodies_vtu(&model, &u, case).map_err(|e| RunError::Write {
+                    path: name.clone(),
+                    source: std::io::Error::other(e.to_string()),
+                })?;
                 wr(&out_dir.join(&name), &bytes)?;
-                pvd.push(PvdEntry { time, part: 0, file: name });
+                pvd.push(PvdEntry {
+                    time,
+                    part: 0,
+                    file: name,
+                });
                 if let Some(st) = &cstate {
                     let cname = format!("{stem}_contact_{step:04}.vtu");
-                    let bytes = contact_vtu(&model, st).map_err(|e| RunError::Write { path: cname.clone(), source: std::io::Error::other(e.to_string()) })?;
+                    let bytes = contact_vtu(&model, st).map_err(|e| RunError::Write {
+                        path: cname.clone(),
+                        source: std::io::Error::other(e.to_string()),
+                    })?;
                     wr(&out_dir.join(&cname), &bytes)?;
-                    pvd.push(PvdEntry { time, part: 1, file: cname });
-                    wr(&out_dir.join(format!("contact_{step:04}.csv")), contact_csv(&model, st).as_bytes())?;
+                    pvd.push(PvdEntry {
+                        time,
+                        part: 1,
+                        file: cname,
+                    });
+                    wr(
+                        &out_dir.join(format!("contact_{step:04}.csv")),
+                        contact_csv(&model, st).as_bytes(),
+                    )?;
                 }
-                wr(&out_dir.join(format!("{stem}.pvd")), output::pvd(&pvd).as_bytes())?;
+                wr(
+                    &out_dir.join(format!("{stem}.pvd")),
+                    output::pvd(&pvd).as_bytes(),
+                )?;
                 t_write += t.elapsed().as_secs_f64();
             }
             if dalpha < nominal {
@@ -444,8 +593,26 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
             let p = r.pilot.unwrap_or_default();
             let c = r.contact.unwrap_or_default();
             vec![
-                r.step as f64, r.stage as f64, r.time, r.traction_scale, p.ux, p.uy, p.fx, p.fy, r.iterations as f64, r.cutbacks as f64,
-                c.n_contact as f64, c.n_stick as f64, c.n_slip as f64, c.a, c.x_centre, c.c, c.b, c.fx, c.fy, r.wall_s,
+                r.step as f64,
+                r.stage as f64,
+                r.time,
+                r.traction_scale,
+                p.ux,
+                p.uy,
+                p.fx,
+                p.fy,
+                r.iterations as f64,
+                r.cutbacks as f64,
+                c.n_contact as f64,
+                c.n_stick as f64,
+                c.n_slip as f64,
+                c.a,
+                c.x_centre,
+                c.c,
+                c.b,
+                c.fx,
+                c.fy,
+                r.wall_s,
             ]
         })
         .collect();
@@ -453,8 +620,26 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
         &out_dir.join("history.csv"),
         output::csv(
             &[
-                "step", "stage", "time", "traction_scale", "pilot_ux", "pilot_uy", "pilot_fx", "pilot_fy", "iterations", "cutbacks", "n_contact", "n_stick", "n_slip", "a", "x_centre", "c", "b",
-                "contact_fx", "contact_fy", "wall_s",
+                "step",
+                "stage",
+                "time",
+                "traction_scale",
+                "pilot_ux",
+                "pilot_uy",
+                "pilot_fx",
+                "pilot_fy",
+                "iterations",
+                "cutbacks",
+                "n_contact",
+                "n_stick",
+                "n_slip",
+                "a",
+                "x_centre",
+                "c",
+                "b",
+                "contact_fx",
+                "contact_fy",
+                "wall_s",
             ],
             &rows,
         )
@@ -483,7 +668,12 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
             Some(m) => format!("failed at {m}; the output holds the steps before it"),
         },
     };
-    wr(&out_dir.join("summary.json"), serde_json::to_string_pretty(&summary).expect("serialisable").as_bytes())?;
+    wr(
+        &out_dir.join("summary.json"),
+        serde_json::to_string_pretty(&summary)
+            .expect("serialisable")
+            .as_bytes(),
+    )?;
     if let Some(m) = failure {
         return Err(RunError::Solve(m));
     }
@@ -504,7 +694,10 @@ pub fn run_model(case: &Case, case_path: &Path, mut model: Model, out_dir: &Path
             out_dir.display()
         );
         if let Some(c) = summary.steps.last().and_then(|s| s.contact) {
-            eprintln!("contact: semi-width a = {:.6}, stick semi-width c = {:.6}, {} nodes in contact, force ({:.6}, {:.6}), {} Newton iterations in all", c.a, c.c, c.n_contact, c.fx, c.fy, summary.newton_iterations);
+            eprintln!(
+                "contact: semi-width a = {:.6}, stick semi-width c = {:.6}, {} nodes in contact, force ({:.6}, {:.6}), {} Newton iterations in all",
+                c.a, c.c, c.n_contact, c.fx, c.fy, summary.newton_iterations
+            );
         }
     }
     Ok(summary)
@@ -519,12 +712,30 @@ fn contact_fields(model: &Model, st: &State) -> Vec<[f64; 8]> {
             // Shear traction on the slave body along its tangent (the master force is −F_t τ on the slave).
             let q = -st.f_t[j] / m.weight[j];
             let ratio = if p > 0.0 { q / p } else { 0.0 };
-            [p, q, st.gap[j], st.slip[j], st.dv[j], st.status[j].code(), st.mu[j], ratio]
+            [
+                p,
+                q,
+                st.gap[j],
+                st.slip[j],
+                st.dv[j],
+                st.status[j].code(),
+                st.mu[j],
+                ratio,
+            ]
         })
         .collect()
 }
 
-const CONTACT_FIELDS: [&str; 8] = ["pressure", "shear", "gap", "slip", "slip_increment", "status", "mu", "q_over_p"];
+const CONTACT_FIELDS: [&str; 8] = [
+    "pressure",
+    "shear",
+    "gap",
+    "slip",
+    "slip_increment",
+    "status",
+    "mu",
+    "q_over_p",
+];
 
 /// The contact dataset: the slave edges of the candidate zone with the nodal contact fields.
 pub fn contact_vtu(model: &Model, st: &State) -> Result<Vec<u8>, vtkio::Error> {
@@ -542,13 +753,31 @@ pub fn contact_vtu(model: &Model, st: &State) -> Result<Vec<u8>, vtkio::Error> {
             });
         }
     }
-    let cells: Vec<Vec<usize>> = cm.pair.zone_edges.iter().map(|e| e.iter().map(|n| index[n]).collect()).collect();
+    let cells: Vec<Vec<usize>> = cm
+        .pair
+        .zone_edges
+        .iter()
+        .map(|e| e.iter().map(|n| index[n]).collect())
+        .collect();
     let fields = contact_fields(model, st);
-    let slot: std::collections::HashMap<usize, usize> = m.slave_nodes.iter().enumerate().map(|(j, &n)| (n, j)).collect();
+    let slot: std::collections::HashMap<usize, usize> = m
+        .slave_nodes
+        .iter()
+        .enumerate()
+        .map(|(j, &n)| (n, j))
+        .collect();
     let mut data: Vec<vtu::Field> = CONTACT_FIELDS
         .iter()
         .enumerate()
-        .map(|(k, name)| vtu::Field::scalar(name, node_ids.iter().map(|n| slot.get(n).map_or(0.0, |&j| fields[j][k])).collect()))
+        .map(|(k, name)| {
+            vtu::Field::scalar(
+                name,
+                node_ids
+                    .iter()
+                    .map(|n| slot.get(n).map_or(0.0, |&j| fields[j][k]))
+                    .collect(),
+            )
+        })
         .collect();
     let mut traction = Vec::new();
     let mut normal = Vec::new();
@@ -618,7 +847,17 @@ pub fn bodies_vtu(model: &Model, u: &[f64], case: &Case) -> Result<Vec<u8>, vtki
         szz.push(s[3]);
         vm.push(crate::elasticity::von_mises(s[0], s[1], s[2], s[3]));
     }
-    let cells: Vec<Vec<usize>> = model.elems.iter().map(|(e, _)| model.mesh.triangles[*e].nodes.iter().map(|&n| index[n]).collect()).collect();
+    let cells: Vec<Vec<usize>> = model
+        .elems
+        .iter()
+        .map(|(e, _)| {
+            model.mesh.triangles[*e]
+                .nodes
+                .iter()
+                .map(|&n| index[n])
+                .collect()
+        })
+        .collect();
     let body: Vec<f64> = model.elem_body.iter().map(|&b| b as f64).collect();
     vtu::unstructured(
         &case.title,

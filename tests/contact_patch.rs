@@ -21,7 +21,14 @@ fn blocks() -> String {
     msh41(
         &nodes,
         &[("lower", t1), ("upper", t2)],
-        &[("bottom", b1), ("lower_top", top1), ("lower_left", l1), ("upper_bottom", shift(b2)), ("top", shift(top2)), ("upper_left", shift(l2))],
+        &[
+            ("bottom", b1),
+            ("lower_top", top1),
+            ("lower_left", l1),
+            ("upper_bottom", shift(b2)),
+            ("top", shift(top2)),
+            ("upper_left", shift(l2)),
+        ],
     )
 }
 
@@ -42,7 +49,13 @@ fn pressures(slave: &str, master: &str) -> Vec<(f64, f64)> {
     std::fs::write(dir.join("case.json"), case(slave, master)).unwrap();
     let out = dir.join("out");
     let st = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args(["run", dir.join("case.json").to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"])
+        .args([
+            "run",
+            dir.join("case.json").to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
         .status()
         .unwrap();
     assert!(st.success());
@@ -62,6 +75,9 @@ fn uniform_pressure_crosses_a_non_matching_interface_exactly() {
         let p = pressures(slave, master);
         assert!(p.len() >= 11, "{slave}: {} slave nodes", p.len());
         let worst = p.iter().map(|(_, v)| (v - 3.0).abs()).fold(0.0, f64::max);
-        assert!(worst < 1e-10 * 3.0, "slave {slave}: max |p − 3| = {worst:e}");
+        assert!(
+            worst < 1e-10 * 3.0,
+            "slave {slave}: max |p − 3| = {worst:e}"
+        );
     }
 }

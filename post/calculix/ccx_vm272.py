@@ -545,8 +545,9 @@ def run_level(level, args):
     rec["csv"] = os.path.relpath(csv_path, REPO) if csv_path.startswith(REPO) else csv_path
     rec["status"] = "ok"
     if not args.keep:
-        for ext in (".frd",):
-            os.remove(os.path.join(wdir, job + ext))
+        for name in (job + ".frd", job + ".12d", "spooles.out"):
+            if os.path.exists(os.path.join(wdir, name)):
+                os.remove(os.path.join(wdir, name))
     return rec
 
 
@@ -572,7 +573,8 @@ def main():
     ap.add_argument("--slip-tol", type=float, default=0.02,
                     help="a slave node sticks if p > 0 and |q| < mu p (1 - slip_tol)")
     ap.add_argument("--timeout", type=float, default=1200.0, help="seconds per ccx run")
-    ap.add_argument("--keep", action="store_true", help="keep the .frd files")
+    ap.add_argument("--keep", action="store_true",
+                    help="keep the .frd, .12d and spooles.out files (removed after reading)")
     args = ap.parse_args()
     args.inc1 = [float(v) for v in args.inc1.split(",")]
     args.inc2 = [float(v) for v in args.inc2.split(",")]

@@ -22,24 +22,45 @@ pub struct Pair {
     pub rim_nodes: Vec<usize>,
     /// Candidate gap used.
     pub candidate_gap: f64,
+    /// The common normal, if the pair uses one.
+    pub common_normal: Option<[f64; 2]>,
 }
 
 /// What stops a pair from being built.
 #[derive(Debug, thiserror::Error)]
 pub enum PairError {
-    #[error("contact: boundary element {tag} of group `{group}` is not an edge of any triangle of the bodies in use")]
+    #[error(
+        "contact: boundary element {tag} of group `{group}` is not an edge of any triangle of the bodies in use"
+    )]
     Dangling { tag: u64, group: String },
     #[error(
         "contact: no slave node of `{slave}` is within the candidate gap {gap:e} of `{master}` (smallest initial gap {min:e}); \
          the faces do not face each other, or raise `contact.candidate_gap`"
     )]
-    EmptyZone { slave: String, master: String, gap: f64, min: f64 },
-    #[error("contact: slave `{slave}` and master `{master}` penetrate initially by {depth:e} at ({x:.6}, {y:.6}); move the bodies apart")]
-    Penetration { slave: String, master: String, depth: f64, x: f64, y: f64 },
+    EmptyZone {
+        slave: String,
+        master: String,
+        gap: f64,
+        min: f64,
+    },
+    #[error(
+        "contact: slave `{slave}` and master `{master}` penetrate initially by {depth:e} at ({x:.6}, {y:.6}); move the bodies apart"
+    )]
+    Penetration {
+        slave: String,
+        master: String,
+        depth: f64,
+        x: f64,
+        y: f64,
+    },
 }
 
 /// Oriented edges of a curve group.
-pub fn oriented_edges(mesh: &Mesh, orient: &EdgeOrientation, group: &str) -> Result<Vec<[usize; 3]>, PairError> {
+pub fn oriented_edges(
+    mesh: &Mesh,
+    orient: &EdgeOrientation,
+    group: &str,
+) -> Result<Vec<[usize; 3]>, PairError> {
     let g = mesh.group(group).expect("checked");
     g.elements
         .iter()
@@ -69,12 +90,21 @@ pub fn default_candidate_gap(mesh: &Mesh, slave: &[[usize; 3]]) -> f64 {
 /// Initial gap of a slave point along its normal: the smallest |g| over master edges hit
 /// within their parameter range, ignoring hits farther than `reach` (a normal line far from the
 /// contact can cross the other face behind the point without any overlap).
-fn point_gap(mesh: &Mesh, master: &[[usize; 3]], x: [f64; 2], n: [f64; 2], reach: f64) -> Option<f64> {
+fn point_gap(
+    mesh: &Mesh,
+    master: &[[usize; 3]],
+    x: [f64; 2],
+    n: [f64; 2],
+    reach: f64,
+) -> Option<f64> {
     let mut best: Option<f64> = None;
     for e in master {
         let xm = e.map(|k| mesh.nodes[k]);
         if let Some((r, g)) = mortar::project_along(&xm, x, n) {
-            if (-1.0 - 1e-9..=1.0 + 1e-9).contains(&r) && g.abs() <= reach && best.is_none_or(|b| g.abs() < b.abs()) {
+            if (-1.0 - 1e-9..=1.0 + 1e-9).contains(&r)
+                && g.abs() <= reach
+                && best.is_none_or(|b| g.abs() < b.abs())
+            {
                 best = Some(g);
             }
         }
@@ -84,9 +114,21 @@ fn point_gap(mesh: &Mesh, master: &[[usize; 3]], x: [f64; 2], n: [f64; 2], reach
 
 /// Chooses the candidate zone (slave edges with a node whose initial gap is at most
 /// `candidate_gap`) and builds the mortar operator on it.
-pub fn build_pair(mesh: &Mesh, slave_name: &str, master_name: &str, slave: &[[usize; 3]], master: &[[usize; 3]], candidate_gap: f64) -> Result<Pair, PairError> {
+///
+/// `common`: use one normal for the whole pair, the slave normal at the point of smallest
+/// initial gap (see [`mortar::build`]).
+pub fn build_pair(
+    mesh: &Mesh,
+    slave_name: &str,
+    master_name: &str,
+    slave: &[[usize; 3]],
+    master: &[[usize; 3]],
+    candidate_gap: f64,
+    common: bool,
+) -> Result<Pair, PairError> {
     let mut zone = Vec::new();
     let mut min_gap = f64::INFINITY;
+    let mut samples: Vec<(f64, [f64; 2])> = Vec::new();
     for (i, e) in slave.iter().enumerate() {
         let xs = e.map(|k| mesh.nodes[k]);
         let mut in_zone = false;
@@ -95,6 +137,7 @@ pub fn build_pair(mesh: &Mesh, slave_name: &str, master_name: &str, slave: &[[us
             let h = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
             if let Some(g) = point_gap(mesh, master, x, n, 10.0 * (candidate_gap + h)) {
                 min_gap = min_gap.min(g);
+                samples.push((g, n));
                 if g < -1e-9 * h {
                     return Err(PairError::Penetration {
                         slave: slave_name.into(),
@@ -121,6 +164,15 @@ pub fn build_pair(mesh: &Mesh, slave_name: &str, master_name: &str, slave: &[[us
             min: min_gap,
         });
     }
+    // The first touch: the normals of the points of smallest gap (averaged over ties, such as
+    // the two edges meeting at the touching node).
+    let tie = min_gap + 1e-6 * candidate_gap;
+    let sum = samples
+        .iter()
+        .filter(|(g, _)| *g <= tie)
+        .fold([0.0, 0.0], |s, (_, n)| [s[0] + n[0], s[1] + n[1]]);
+    let len = sum[0].hypot(sum[1]);
+    let first_touch = [sum[0] / len, sum[1] / len];
     let zone_edges: Vec<[usize; 3]> = zone.iter().map(|&i| slave[i]).collect();
     // Master edges near the zone.
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
@@ -142,12 +194,20 @@ pub fn build_pair(mesh: &Mesh, slave_name: &str, master_name: &str, slave: &[[us
         .filter(|e| {
             e.iter().any(|&k| {
                 let p = mesh.nodes[k];
-                p[0] >= lo[0] - reach && p[0] <= hi[0] + reach && p[1] >= lo[1] - reach && p[1] <= hi[1] + reach
+                p[0] >= lo[0] - reach
+                    && p[0] <= hi[0] + reach
+                    && p[1] >= lo[1] - reach
+                    && p[1] <= hi[1] + reach
             })
         })
         .copied()
         .collect();
-    let mortar = mortar::build(&mesh.nodes, &zone_edges, &near);
+    let mortar = mortar::build(
+        &mesh.nodes,
+        &zone_edges,
+        &near,
+        common.then_some(first_touch),
+    );
     // The rim: zone vertices shared with a slave edge outside the zone. Contact there means
     // the zone may clip it (a zone that is the whole slave face has no rim).
     let in_zone: std::collections::HashSet<usize> = zone.iter().copied().collect();
@@ -170,6 +230,7 @@ pub fn build_pair(mesh: &Mesh, slave_name: &str, master_name: &str, slave: &[[us
         zone_edges,
         rim_nodes,
         candidate_gap,
+        common_normal: common.then_some(first_touch),
     })
 }
 
@@ -189,7 +250,12 @@ pub struct ContactModel {
 impl ContactModel {
     /// Expresses the pair's mortar operator in the retained DOFs of `dofs` and builds the
     /// Delassus operator from the condensed stiffness.
-    pub fn new(pair: Pair, dofs: &crate::dofs::DofMap, cond: &crate::condense::Condensed, e_star: f64) -> ContactModel {
+    pub fn new(
+        pair: Pair,
+        dofs: &crate::dofs::DofMap,
+        cond: &crate::condense::Condensed,
+        e_star: f64,
+    ) -> ContactModel {
         use crate::dofs::Dof;
         let m0 = &pair.mortar;
         let ns = m0.slave_nodes.len();
@@ -233,9 +299,20 @@ impl ContactModel {
             }
         }
         let par = faer::get_global_parallelism();
-        faer::linalg::triangular_solve::solve_lower_triangular_in_place(cond.chol.l_rr(), z.as_mut(), par);
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+            cond.chol.l_rr(),
+            z.as_mut(),
+            par,
+        );
         let mut w = faer::Mat::<f64>::zeros(m, m);
-        faer::linalg::matmul::matmul(w.as_mut(), faer::Accum::Replace, z.transpose(), z.as_ref(), 1.0, par);
+        faer::linalg::matmul::matmul(
+            w.as_mut(),
+            faer::Accum::Replace,
+            z.transpose(),
+            z.as_ref(),
+            1.0,
+            par,
+        );
         let kg: Vec<f64> = cond.grounding.iter().map(|g| g.1).collect();
         let eps_unit = (0..ns).map(|j| e_star * m0.weight[j] / m0.h[j]).collect();
         let mut master_dof = vec![false; n_r];
@@ -276,10 +353,21 @@ impl ContactModel {
             x[(i, 0)] = g[i];
         }
         let par = faer::get_global_parallelism();
-        faer::linalg::triangular_solve::solve_lower_triangular_in_place(cond.chol.l_rr(), x.as_mut(), par);
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+            cond.chol.l_rr(),
+            x.as_mut(),
+            par,
+        );
         let m = self.system.z.ncols();
         let mut out = faer::Mat::<f64>::zeros(m, 1);
-        faer::linalg::matmul::matmul(out.as_mut(), faer::Accum::Replace, self.system.z.transpose(), x.as_ref(), 1.0, par);
+        faer::linalg::matmul::matmul(
+            out.as_mut(),
+            faer::Accum::Replace,
+            self.system.z.transpose(),
+            x.as_ref(),
+            1.0,
+            par,
+        );
         (0..m).map(|i| out[(i, 0)]).collect()
     }
 

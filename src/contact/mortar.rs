@@ -87,18 +87,39 @@ pub fn frame(xs: &[[f64; 2]; 3], s: f64) -> ([f64; 2], [f64; 2], [f64; 2], f64) 
     (x, n, [n[1], -n[0]], j)
 }
 
+/// The frame used by the mortar integrals at slave parameter `s`: the edge's own normal and
+/// tangent, or a common normal `n0` for the whole pair (see [`build`]).
+fn frame_with(
+    xs: &[[f64; 2]; 3],
+    s: f64,
+    n0: Option<[f64; 2]>,
+) -> ([f64; 2], [f64; 2], [f64; 2], f64) {
+    let (x, n, tau, j) = frame(xs, s);
+    match n0 {
+        Some(c) => (x, c, [c[1], -c[0]], j),
+        None => (x, n, tau, j),
+    }
+}
+
 /// The master parameter hit by the normal from slave parameter `s`.
-fn r_of_s(xs: &[[f64; 2]; 3], xm: &[[f64; 2]; 3], s: f64) -> Option<f64> {
-    let (x, n, _, _) = frame(xs, s);
+fn r_of_s(xs: &[[f64; 2]; 3], xm: &[[f64; 2]; 3], s: f64, n0: Option<[f64; 2]>) -> Option<f64> {
+    let (x, n, _, _) = frame_with(xs, s, n0);
     project_along(xm, x, n).map(|(r, _)| r)
 }
 
 /// Slave parameter in [lo, hi] where `r(s) = target`, by bisection (r is monotone in s).
-fn solve_r(xs: &[[f64; 2]; 3], xm: &[[f64; 2]; 3], target: f64, mut lo: f64, mut hi: f64) -> Option<f64> {
-    let mut flo = r_of_s(xs, xm, lo)? - target;
+fn solve_r(
+    xs: &[[f64; 2]; 3],
+    xm: &[[f64; 2]; 3],
+    target: f64,
+    mut lo: f64,
+    mut hi: f64,
+    n0: Option<[f64; 2]>,
+) -> Option<f64> {
+    let mut flo = r_of_s(xs, xm, lo, n0)? - target;
     for _ in 0..80 {
         let mid = 0.5 * (lo + hi);
-        let fm = r_of_s(xs, xm, mid)? - target;
+        let fm = r_of_s(xs, xm, mid, n0)? - target;
         if (fm < 0.0) == (flo < 0.0) {
             lo = mid;
             flo = fm;
@@ -114,7 +135,21 @@ fn solve_r(xs: &[[f64; 2]; 3], xm: &[[f64; 2]; 3], target: f64, mut lo: f64, mut
 
 /// Builds the mortar operator for the slave edges `slave` and master edges `master`, each given
 /// by its three mesh nodes ordered with its body on the left, over node coordinates `x`.
-pub fn build(x: &[[f64; 2]], slave: &[[usize; 3]], master: &[[usize; 3]]) -> Mortar {
+///
+/// `common_normal`: `None` projects along, and splits the relative displacement into, each
+/// slave point's own normal and tangent. `Some(n0)` uses one direction `n0` for the whole pair:
+/// the classical small-strain contact of two curved bodies (Johnson §4.1, the paper's theory),
+/// where gaps are measured and forces transmitted along the common normal of the first touch.
+/// With local normals the rigid approach `δ` of the bodies has a component `δ·x/R` along the
+/// tilted tangents, which appears as spurious slip of the order of the elastic slip when
+/// `a/R` is not small against `μ`.
+pub fn build(
+    x: &[[f64; 2]],
+    slave: &[[usize; 3]],
+    master: &[[usize; 3]],
+    common_normal: Option<[f64; 2]>,
+) -> Mortar {
+    let n0 = common_normal;
     #[derive(Default)]
     struct Acc {
         w: f64,
@@ -160,11 +195,18 @@ pub fn build(x: &[[f64; 2]], slave: &[[usize; 3]], master: &[[usize; 3]]) -> Mor
         for (mi, me) in master.iter().enumerate() {
             let (mlo, mhi) = mboxes[mi];
             let reach = 10.0 * chord + (mhi[0] - mlo[0]).max(mhi[1] - mlo[1]);
-            if mlo[0] > hi[0] + reach || mhi[0] < lo[0] - reach || mlo[1] > hi[1] + reach || mhi[1] < lo[1] - reach {
+            if mlo[0] > hi[0] + reach
+                || mhi[0] < lo[0] - reach
+                || mlo[1] > hi[1] + reach
+                || mhi[1] < lo[1] - reach
+            {
                 continue;
             }
             let xm = coords(me);
-            let (Some(ra), Some(rb)) = (r_of_s(&xs, &xm, -1.0), r_of_s(&xs, &xm, 1.0)) else { continue };
+            let (Some(ra), Some(rb)) = (r_of_s(&xs, &xm, -1.0, n0), r_of_s(&xs, &xm, 1.0, n0))
+            else {
+                continue;
+            };
             if ra.max(rb) < -1.0 || ra.min(rb) > 1.0 {
                 continue;
             }
@@ -173,7 +215,7 @@ pub fn build(x: &[[f64; 2]], slave: &[[usize; 3]], master: &[[usize; 3]]) -> Mor
             let mut s_hi: f64 = 1.0;
             for target in [-1.0, 1.0] {
                 if (ra - target) * (rb - target) < 0.0 {
-                    let s = solve_r(&xs, &xm, target, -1.0, 1.0).unwrap_or(0.0);
+                    let s = solve_r(&xs, &xm, target, -1.0, 1.0, n0).unwrap_or(0.0);
                     // Which side of s is inside?
                     // r(s) is monotone: the left part (s < s*) is inside iff r(−1) is.
                     let inside_left = if target < 0.0 { ra > -1.0 } else { ra < 1.0 };
@@ -185,7 +227,8 @@ pub fn build(x: &[[f64; 2]], slave: &[[usize; 3]], master: &[[usize; 3]]) -> Mor
                 }
             }
             // A slave edge whose image only touches this master edge at an end gives no segment.
-            let inside = r_of_s(&xs, &xm, 0.5 * (s_lo + s_hi)).is_some_and(|r| r.abs() <= 1.0 + 1e-9);
+            let inside =
+                r_of_s(&xs, &xm, 0.5 * (s_lo + s_hi), n0).is_some_and(|r| r.abs() <= 1.0 + 1e-9);
             if s_hi - s_lo > 1e-14 && inside {
                 segments.push((s_lo, s_hi, mi));
             }
@@ -195,8 +238,10 @@ pub fn build(x: &[[f64; 2]], slave: &[[usize; 3]], master: &[[usize; 3]]) -> Mor
             let half = 0.5 * (s_hi - s_lo);
             for &(gq, wq) in gauss_legendre(5) {
                 let s = s_lo + half * (gq + 1.0);
-                let (xp, n, tau, j) = frame(&xs, s);
-                let Some((r, g0)) = project_along(&xm, xp, n) else { continue };
+                let (xp, n, tau, j) = frame_with(&xs, s, n0);
+                let Some((r, g0)) = project_along(&xm, xp, n) else {
+                    continue;
+                };
                 let ns = lin3::n(s);
                 let nm = lin3::n(r.clamp(-1.0, 1.0));
                 let dw = wq * half * j;
@@ -228,7 +273,7 @@ pub fn build(x: &[[f64; 2]], slave: &[[usize; 3]], master: &[[usize; 3]]) -> Mor
         }
         // Nodal frame: normal and tangent of the edge at its nodes (averaged over edges).
         for (a, s) in [(0usize, -1.0), (1, 1.0), (2, 0.0)] {
-            let (_, n, tau, _) = frame(&xs, s);
+            let (_, n, tau, _) = frame_with(&xs, s, n0);
             let e = acc.entry(se[a]).or_default();
             e.n = [e.n[0] + n[0], e.n[1] + n[1]];
             e.tau = [e.tau[0] + tau[0], e.tau[1] + tau[1]];
@@ -240,7 +285,9 @@ pub fn build(x: &[[f64; 2]], slave: &[[usize; 3]], master: &[[usize; 3]]) -> Mor
     entries.sort_by(|a, b| {
         let (pa, pb) = (x[a.0], x[b.0]);
         let t = a.1.tau;
-        (pa[0] * t[0] + pa[1] * t[1]).partial_cmp(&(pb[0] * t[0] + pb[1] * t[1])).expect("finite")
+        (pa[0] * t[0] + pa[1] * t[1])
+            .partial_cmp(&(pb[0] * t[0] + pb[1] * t[1]))
+            .expect("finite")
     });
     for (node, a) in entries {
         let unit = |v: [f64; 2]| {
@@ -250,8 +297,18 @@ pub fn build(x: &[[f64; 2]], slave: &[[usize; 3]], master: &[[usize; 3]]) -> Mor
         m.slave_nodes.push(node);
         m.weight.push(a.w);
         m.gap0.push(a.g0 / a.w);
-        m.g_rows.push(a.g.into_iter().map(|(k, v)| (k, [v[0] / a.w, v[1] / a.w])).filter(|(_, v)| v[0] != 0.0 || v[1] != 0.0).collect());
-        m.t_rows.push(a.t.into_iter().map(|(k, v)| (k, [v[0] / a.w, v[1] / a.w])).filter(|(_, v)| v[0] != 0.0 || v[1] != 0.0).collect());
+        m.g_rows.push(
+            a.g.into_iter()
+                .map(|(k, v)| (k, [v[0] / a.w, v[1] / a.w]))
+                .filter(|(_, v)| v[0] != 0.0 || v[1] != 0.0)
+                .collect(),
+        );
+        m.t_rows.push(
+            a.t.into_iter()
+                .map(|(k, v)| (k, [v[0] / a.w, v[1] / a.w]))
+                .filter(|(_, v)| v[0] != 0.0 || v[1] != 0.0)
+                .collect(),
+        );
         m.normal.push(unit(a.n));
         m.tangent.push(unit(a.tau));
         m.h.push(a.h);

@@ -138,8 +138,14 @@ pub struct StepOutcome {
 /// Why a step did not converge.
 #[derive(Debug, Clone, thiserror::Error)]
 pub enum ContactError {
-    #[error("the contact Newton iteration did not converge in {iterations} iterations (last relative update {update:.2e}, {changes} nodes still changing state)")]
-    NoConvergence { iterations: usize, update: f64, changes: usize },
+    #[error(
+        "the contact Newton iteration did not converge in {iterations} iterations (last relative update {update:.2e}, {changes} nodes still changing state)"
+    )]
+    NoConvergence {
+        iterations: usize,
+        update: f64,
+        changes: usize,
+    },
     #[error("the contact equations became singular: {0}")]
     Singular(String),
 }
@@ -184,7 +190,14 @@ impl ContactSystem {
 
     /// Solves one load step from the committed state `prev`, with the condensed load `w0`
     /// (from the bodies' loads), the pilot drive, and friction law `law` (`None`: frictionless).
-    pub fn solve_step(&self, w0: &[f64], drive: [PilotDrive; 2], law: Option<&FrictionLaw>, prev: &State, opt: &Options) -> Result<StepOutcome, ContactError> {
+    pub fn solve_step(
+        &self,
+        w0: &[f64],
+        drive: [PilotDrive; 2],
+        law: Option<&FrictionLaw>,
+        prev: &State,
+        opt: &Options,
+    ) -> Result<StepOutcome, ContactError> {
         let ns = self.ns;
         let m = self.m();
         assert_eq!(w0.len(), m);
@@ -206,10 +219,19 @@ impl ContactSystem {
             let mut order: Vec<usize> = (0..ns).collect();
             order.sort_by(|&a, &b| self.gap0[a].partial_cmp(&self.gap0[b]).expect("finite"));
             for &j in order.iter().take(3.min(ns)) {
-                status[j] = if law.is_some() { Status::Stick } else { Status::Slip };
+                status[j] = if law.is_some() {
+                    Status::Stick
+                } else {
+                    Status::Slip
+                };
             }
         }
-        let mut sign = vec![1.0; ns];
+        // Slip directions of the warm start: the sign of the committed tangential force.
+        let mut sign: Vec<f64> = prev
+            .f_t
+            .iter()
+            .map(|f| if *f < 0.0 { -1.0 } else { 1.0 })
+            .collect();
         let mut last_update = f64::INFINITY;
         let mut first = true;
         for it in 1..=opt.max_iterations {
@@ -266,16 +288,14 @@ impl ContactSystem {
                     }
                 }
                 if it == opt.max_iterations {
-                    return Err(ContactError::NoConvergence { iterations: it, update: last_update, changes });
+                    return Err(ContactError::NoConvergence {
+                        iterations: it,
+                        update: last_update,
+                        changes,
+                    });
                 }
             }
             first = false;
-            // Slip directions for nodes entering slip from the warm start.
-            for j in 0..ns {
-                if status[j] == Status::Slip && law.is_some() && mu[ns + j] != 0.0 && sign[j] == 0.0 {
-                    sign[j] = mu[ns + j].signum();
-                }
-            }
             // Unknowns of this iteration.
             let mut pos = vec![usize::MAX; m];
             let mut unk = Vec::new();
@@ -318,7 +338,11 @@ impl ContactSystem {
                             // F_n + ε ĝ = F̄ (F̄ = 0 for the penalty method)
                             a[(r, r)] += 1.0;
                             wrow(&mut a, r, j, eps[j]);
-                            let fb = if opt.method == Method::Penalty { 0.0 } else { fbar_n[j] };
+                            let fb = if opt.method == Method::Penalty {
+                                0.0
+                            } else {
+                                fbar_n[j]
+                            };
                             b[(r, 0)] = fb + eps[j] * rhs;
                         }
                     }
@@ -335,7 +359,11 @@ impl ContactSystem {
                                 // F_t = F̄_t − ε Δv̂
                                 a[(r, r)] += 1.0;
                                 wrow(&mut a, r, u, eps[j]);
-                                let fb = if opt.method == Method::Penalty { prev.f_t[j] } else { fbar_t[j] };
+                                let fb = if opt.method == Method::Penalty {
+                                    prev.f_t[j]
+                                } else {
+                                    fbar_t[j]
+                                };
                                 b[(r, 0)] = fb - eps[j] * (w0[u] - prev.v[j]);
                             }
                         },
@@ -361,7 +389,11 @@ impl ContactSystem {
                     }
                 } else {
                     let k = u - 2 * ns;
-                    let d = if self.has_pilot && k < 2 { drive[k] } else { PilotDrive::Force(0.0) };
+                    let d = if self.has_pilot && k < 2 {
+                        drive[k]
+                    } else {
+                        PilotDrive::Force(0.0)
+                    };
                     match d {
                         PilotDrive::Force(f) => {
                             a[(r, r)] += 1.0;
@@ -387,8 +419,14 @@ impl ContactSystem {
             for (q, &u) in unk.iter().enumerate() {
                 new_mu[u] = x[(q, 0)];
             }
-            let scale = new_mu[..2 * ns].iter().fold(0.0f64, |a, v| a.max(v.abs())).max(f64::MIN_POSITIVE);
-            last_update = (0..2 * ns).map(|i| (new_mu[i] - mu[i]).abs()).fold(0.0, f64::max) / scale;
+            let scale = new_mu[..2 * ns]
+                .iter()
+                .fold(0.0f64, |a, v| a.max(v.abs()))
+                .max(f64::MIN_POSITIVE);
+            last_update = (0..2 * ns)
+                .map(|i| (new_mu[i] - mu[i]).abs())
+                .fold(0.0, f64::max)
+                / scale;
             mu = new_mu;
         }
         unreachable!("the loop returns")
@@ -404,7 +442,16 @@ impl ContactSystem {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn finish(&self, w0: &[f64], mu: &[f64], status: &[Status], law: Option<&FrictionLaw>, prev: &State, iterations: usize, last_update: f64) -> StepOutcome {
+    fn finish(
+        &self,
+        w0: &[f64],
+        mu: &[f64],
+        status: &[Status],
+        law: Option<&FrictionLaw>,
+        prev: &State,
+        iterations: usize,
+        last_update: f64,
+    ) -> StepOutcome {
         let ns = self.ns;
         let y = self.y(w0, mu);
         let mut st = prev.clone();
@@ -414,7 +461,12 @@ impl ContactSystem {
             st.gap[j] = self.gap0[j] + y[j];
             st.v[j] = y[ns + j];
             st.dv[j] = y[ns + j] - prev.v[j];
-            st.slip[j] = prev.slip[j] + if status[j] == Status::Slip { st.dv[j].abs() } else { 0.0 };
+            st.slip[j] = prev.slip[j]
+                + if status[j] == Status::Slip {
+                    st.dv[j].abs()
+                } else {
+                    0.0
+                };
             st.status[j] = status[j];
             st.mu[j] = law.map_or(0.0, |l| l.mu(st.slip[j]));
         }
@@ -427,6 +479,10 @@ impl ContactSystem {
                 st.pilot_f[k] = st.z[k] - self.kg[k] * st.pilot_u[k];
             }
         }
-        StepOutcome { state: st, iterations, last_update }
+        StepOutcome {
+            state: st,
+            iterations,
+            last_update,
+        }
     }
 }
