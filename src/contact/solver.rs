@@ -270,7 +270,10 @@ impl ContactSystem {
                         status[j] = new;
                     }
                 }
-                let converged_inner = changes == 0 && last_update <= opt.tolerance;
+                // With the sets unchanged the last linear solve is the answer when the equations
+                // are linear in the sets (constant μ); a slip-dependent μ also needs a small update.
+                let linear = law.is_none_or(|l| matches!(l, FrictionLaw::Constant { .. }));
+                let converged_inner = changes == 0 && (linear || last_update <= opt.tolerance);
                 if converged_inner {
                     if opt.method == Method::AugmentedLagrangian {
                         // Outer update: stop when the penetration is small.
@@ -296,33 +299,62 @@ impl ContactSystem {
                 }
             }
             first = false;
-            // Unknowns of this iteration.
+            // Slip nodes whose μ does not change with slip at the iterate (constant law, or past
+            // the weakening): their tangential force is s μ F_n exactly, so it is substituted
+            // rather than solved for.
+            let mut slip_lin = vec![(0.0, 0.0, 0.0, 0.0); ns]; // (μ_k, μ'_k, Δv_k, σ)
+            let mut substituted = vec![false; ns];
+            if let Some(law) = law {
+                for j in 0..ns {
+                    if status[j] == Status::Slip {
+                        let dv_k = self.y_at(w0, &mu, ns + j) - prev.v[j];
+                        let u_k = prev.slip[j] + dv_k.abs();
+                        let dmu = law.dmu_du(u_k).unwrap_or(0.0);
+                        let sigma = if dv_k != 0.0 { dv_k.signum() } else { -sign[j] };
+                        slip_lin[j] = (law.mu(u_k), dmu, dv_k, sigma);
+                        substituted[j] = dmu == 0.0 || mu[j] == 0.0;
+                    }
+                }
+            }
+            // Unknowns of this iteration, and how each μ component maps onto them:
+            // (μ index, unknown position, factor).
             let mut pos = vec![usize::MAX; m];
             let mut unk = Vec::new();
+            let mut cols: Vec<(usize, usize, f64)> = Vec::new();
             for j in 0..ns {
                 if status[j] != Status::Open {
                     pos[j] = unk.len();
+                    cols.push((j, unk.len(), 1.0));
                     unk.push(j);
                 }
             }
             if law.is_some() {
                 for j in 0..ns {
-                    if status[j] != Status::Open {
+                    if status[j] == Status::Open {
+                        continue;
+                    }
+                    if substituted[j] {
+                        cols.push((ns + j, pos[j], sign[j] * slip_lin[j].0));
+                    } else {
                         pos[ns + j] = unk.len();
+                        cols.push((ns + j, unk.len(), 1.0));
                         unk.push(ns + j);
                     }
                 }
             }
             for k in 0..self.kg.len() {
                 pos[2 * ns + k] = unk.len();
+                cols.push((2 * ns + k, unk.len(), 1.0));
                 unk.push(2 * ns + k);
             }
             let nu = unk.len();
             let mut a = Mat::<f64>::zeros(nu, nu);
             let mut b = Mat::<f64>::zeros(nu, 1);
+            // Row i of W over the unknowns; W is symmetric, so read its column i (contiguous).
             let wrow = |a: &mut Mat<f64>, r: usize, i: usize, scale: f64| {
-                for (q, &u) in unk.iter().enumerate() {
-                    a[(r, q)] += scale * self.w[(i, u)];
+                let col = self.w.col(i);
+                for &(mi, q, f) in &cols {
+                    a[(r, q)] += scale * f * col[mi];
                 }
             };
             for (r, &u) in unk.iter().enumerate() {
@@ -338,11 +370,7 @@ impl ContactSystem {
                             // F_n + ε ĝ = F̄ (F̄ = 0 for the penalty method)
                             a[(r, r)] += 1.0;
                             wrow(&mut a, r, j, eps[j]);
-                            let fb = if opt.method == Method::Penalty {
-                                0.0
-                            } else {
-                                fbar_n[j]
-                            };
+                            let fb = if opt.method == Method::Penalty { 0.0 } else { fbar_n[j] };
                             b[(r, 0)] = fb + eps[j] * rhs;
                         }
                     }
@@ -359,41 +387,26 @@ impl ContactSystem {
                                 // F_t = F̄_t − ε Δv̂
                                 a[(r, r)] += 1.0;
                                 wrow(&mut a, r, u, eps[j]);
-                                let fb = if opt.method == Method::Penalty {
-                                    prev.f_t[j]
-                                } else {
-                                    fbar_t[j]
-                                };
+                                let fb = if opt.method == Method::Penalty { prev.f_t[j] } else { fbar_t[j] };
                                 b[(r, 0)] = fb - eps[j] * (w0[u] - prev.v[j]);
                             }
                         },
                         Status::Slip => {
-                            // F_t = s μ(U + |Δv̂|) F_n, linearised at the current iterate.
-                            let law = law.expect("friction");
-                            let dv_k = self.y_at(w0, &mu, u) - prev.v[j];
-                            let u_k = prev.slip[j] + dv_k.abs();
-                            let mu_k = law.mu(u_k);
-                            let dmu = law.dmu_du(u_k).unwrap_or(0.0);
-                            let s = sign[j];
-                            let fnk = mu[j];
-                            let sigma = if dv_k != 0.0 { dv_k.signum() } else { -s };
+                            // F_t = s μ(U + |Δv̂|) F_n, linearised at the current iterate:
+                            // F_t − s μ_k F_n − s F_n,k μ'_k σ (Δv̂ − Δv̂_k) = 0.
+                            let (mu_k, dmu, dv_k, sigma) = slip_lin[j];
+                            let s_j = sign[j];
                             a[(r, r)] += 1.0;
-                            a[(r, pos[j])] -= s * mu_k;
-                            let coef = s * fnk * dmu * sigma;
-                            if coef != 0.0 {
-                                wrow(&mut a, r, u, -coef);
-                            }
+                            a[(r, pos[j])] -= s_j * mu_k;
+                            let coef = s_j * mu[j] * dmu * sigma;
+                            wrow(&mut a, r, u, -coef);
                             b[(r, 0)] = coef * (w0[u] - prev.v[j] - dv_k);
                         }
                         Status::Open => unreachable!(),
                     }
                 } else {
                     let k = u - 2 * ns;
-                    let d = if self.has_pilot && k < 2 {
-                        drive[k]
-                    } else {
-                        PilotDrive::Force(0.0)
-                    };
+                    let d = if self.has_pilot && k < 2 { drive[k] } else { PilotDrive::Force(0.0) };
                     match d {
                         PilotDrive::Force(f) => {
                             a[(r, r)] += 1.0;
@@ -419,6 +432,11 @@ impl ContactSystem {
             for (q, &u) in unk.iter().enumerate() {
                 new_mu[u] = x[(q, 0)];
             }
+            for j in 0..ns {
+                if substituted[j] && status[j] == Status::Slip {
+                    new_mu[ns + j] = sign[j] * slip_lin[j].0 * new_mu[j];
+                }
+            }
             let scale = new_mu[..2 * ns]
                 .iter()
                 .fold(0.0f64, |a, v| a.max(v.abs()))
@@ -438,7 +456,8 @@ impl ContactSystem {
     }
 
     fn y_at(&self, w0: &[f64], mu: &[f64], i: usize) -> f64 {
-        w0[i] + (0..mu.len()).map(|j| self.w[(i, j)] * mu[j]).sum::<f64>()
+        let col = self.w.col(i);
+        w0[i] + (0..mu.len()).map(|j| col[j] * mu[j]).sum::<f64>()
     }
 
     #[allow(clippy::too_many_arguments)]
