@@ -168,6 +168,7 @@ impl Model {
         scale: f64,
         control: [Control; 2],
         prev: &State,
+        guess: Option<&State>,
         opt: &solver::Options,
         law: Option<&crate::friction::FrictionLaw>,
     ) -> Result<(Vec<f64>, solver::StepOutcome), ContactError> {
@@ -181,7 +182,7 @@ impl Model {
             Control::Force(f) => PilotDrive::Force(f),
             Control::Displacement(d) => PilotDrive::Displacement(d),
         });
-        let out = cm.system.solve_step(&w0, drive, law, prev, opt)?;
+        let out = cm.system.solve_step(&w0, drive, law, prev, guess, opt)?;
         let r = cm.retained_forces(&out.state, self.dofs.n_retained);
         let u = self.condensed.recover_total(&self.load(scale), &r);
         Ok((u, out))
@@ -433,6 +434,8 @@ pub fn run_model(
         let nominal = 1.0 / stage.steps as f64;
         let mut alpha = 0.0;
         let mut dalpha = nominal;
+        // The state before the last converged one, with its load fraction (none across stages).
+        let mut older: Option<(f64, State)> = None;
         let mut cutbacks = 0;
         while alpha < 1.0 - 1e-12 {
             let a_new = (alpha + dalpha).min(1.0);
@@ -455,7 +458,29 @@ pub fn run_model(
             }
             let (u, p, iterations) = if let (Some(prev), Some(opt)) = (&cstate, &copt) {
                 let tc = Instant::now();
-                let res = model.solve_contact_step(sc, ctl, prev, opt, law.as_ref());
+                // Predictor: extrapolate the forces of the last two steps of this stage.
+                let guess = older
+                    .as_ref()
+                    .filter(|(a0, _)| *a0 >= 0.0)
+                    .map(|(a_old, old)| {
+                        let t = (a_new - alpha) / (alpha - a_old).max(1e-300);
+                        let ext = |c: &[f64], o: &[f64]| {
+                            c.iter()
+                                .zip(o)
+                                .map(|(c, o)| c + t * (c - o))
+                                .collect::<Vec<f64>>()
+                        };
+                        let mut g = prev.clone();
+                        g.f_n = ext(&prev.f_n, &old.f_n)
+                            .into_iter()
+                            .map(|v| v.max(0.0))
+                            .collect();
+                        g.f_t = ext(&prev.f_t, &old.f_t);
+                        g.z = ext(&prev.z, &old.z);
+                        g
+                    });
+                let res =
+                    model.solve_contact_step(sc, ctl, prev, guess.as_ref(), opt, law.as_ref());
                 t_contact += tc.elapsed().as_secs_f64();
                 match res {
                     Ok((u, out)) => {
@@ -484,6 +509,7 @@ pub fn run_model(
                                 step: step + 1,
                             });
                         }
+                        older = cstate.take().map(|c| (alpha, c));
                         cstate = Some(out.state);
                         (u, has_pilot.then_some(p), it)
                     }

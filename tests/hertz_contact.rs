@@ -48,6 +48,7 @@ fn solve_model(model: &Model, load: f64, method: Method, kappa: f64) -> Solution
             0.0,
             [Control::Force(0.0), Control::Force(-load)],
             &prev,
+            None,
             &opt,
             None,
         )

@@ -402,18 +402,7 @@ def parse_ccx_log(text):
     m = re.findall(r"Total CalculiX Time:\s*([0-9.Ee+-]+)", text)
     if m:
         info["ccx_total_time_reported_s"] = float(m[-1])
-    # time breakdown printed by ccx 2.20 at the end ("Time spent in ...")
-    brk = {}
-    for line in text.splitlines():
-        mm = re.match(r"\s*(.+?)\s*:\s*([0-9.]+(?:[Ee][+-]?\d+)?)\s*$", line)
-        if mm and ("time" in mm.group(1).lower() or "Time" in mm.group(1)):
-            key = re.sub(r"[^a-z0-9]+", "_", mm.group(1).lower()).strip("_")
-            try:
-                brk[key] = float(mm.group(2))
-            except ValueError:
-                pass
-    if brk:
-        info["ccx_time_breakdown_s"] = brk
+    # ccx 2.20 prints no per-phase timing; the .sta file gives increments and iterations
     info["iterations"] = len(re.findall(r"iteration\s+\d+", text))
     info["increments"] = len(re.findall(r"increment\s+\d+\s+attempt", text))
     info["cutbacks"] = len(re.findall(r"attempt\s+[2-9]", text))
@@ -453,11 +442,43 @@ def run_level(level, args):
     env = dict(os.environ)
     env["OMP_NUM_THREADS"] = str(args.threads)
     env["CCX_NPROC_EQUATION_SOLVER"] = str(args.threads)
+    cmd = [args.ccx, "-i", job]
+    stdbuf = shutil.which("stdbuf") if args.profile else None
+    if stdbuf:  # unbuffered stdout so that each log line can be time-stamped
+        cmd = [stdbuf, "-o0"] + cmd
+    phases = {}
     t0 = time.perf_counter()
     with open(os.path.join(wdir, job + ".log"), "w") as log:
-        proc = subprocess.run([args.ccx, "-i", job], cwd=wdir, env=env, stdout=log,
-                              stderr=subprocess.STDOUT, timeout=args.timeout)
+        proc = subprocess.Popen(cmd, cwd=wdir, env=env, stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, text=True, bufsize=1)
+        last_t, last_phase = 0.0, "other"
+        for line in proc.stdout:
+            t = time.perf_counter() - t0
+            log.write(line)
+            if time.perf_counter() - t0 > args.timeout:
+                proc.kill()
+                raise subprocess.TimeoutExpired(cmd, args.timeout)
+            s = line.strip()
+            if not s:
+                continue
+            phases[last_phase] = phases.get(last_phase, 0.0) + (t - last_t)
+            last_t = t
+            low = s.lower()
+            if "for spooles" in low or "for pardiso" in low or "for pastix" in low:
+                last_phase = "linear_solver_factor_solve"
+            elif "symmetric stiffness" in low and "asymmetric" not in low:
+                last_phase = "stiffness_assembly_symmetric"
+            elif "asymmetric stiffness" in low:
+                last_phase = "stiffness_assembly_asymmetric"
+            elif "stress calculation" in low:
+                last_phase = "stress_and_contact_forces"
+            elif "structure of the matrix" in low:
+                last_phase = "matrix_structure"
+            else:
+                last_phase = "other"
+        proc.wait()
     wall = time.perf_counter() - t0
+    phases[last_phase] = phases.get(last_phase, 0.0) + (wall - last_t)
     with open(os.path.join(wdir, job + ".log")) as fh:
         logtext = fh.read()
     rec = {
@@ -481,7 +502,12 @@ def run_level(level, args):
         "deck": os.path.relpath(deck, REPO) if deck.startswith(REPO) else deck,
     }
     rec.update(parse_ccx_log(logtext))
+    if stdbuf:
+        rec["time_breakdown_s"] = {k: round(v, 2) for k, v in
+                                   sorted(phases.items(), key=lambda kv: -kv[1])}
     rec["sta"] = parse_sta(os.path.join(wdir, job + ".sta"))
+    if rec.get("iterations"):
+        rec["wall_per_iteration_s"] = round(wall / rec["iterations"], 4)
     frd = os.path.join(wdir, job + ".frd")
     ok = proc.returncode == 0 and "Job finished" in logtext and os.path.exists(frd)
     if not ok:
@@ -564,7 +590,7 @@ def main():
                     help="stick slope lambda (N/mm^3) of *FRICTION")
     ap.add_argument("--delta0", type=float, default=1.0e-3,
                     help="prescribed pilot approach (mm) of ccx step 1 that closes the contact")
-    ap.add_argument("--inc1", default="0.05,1e-5,0.1",
+    ap.add_argument("--inc1", default="0.1,1e-5,0.1",
                     help="normal step: initial, minimum, maximum increment (fractions of P)")
     ap.add_argument("--inc2", default="0.05,1e-5,0.05",
                     help="tangential step: initial, minimum, maximum increment (fractions of Q)")
@@ -573,6 +599,8 @@ def main():
     ap.add_argument("--slip-tol", type=float, default=0.02,
                     help="a slave node sticks if p > 0 and |q| < mu p (1 - slip_tol)")
     ap.add_argument("--timeout", type=float, default=1200.0, help="seconds per ccx run")
+    ap.add_argument("--no-profile", dest="profile", action="store_false",
+                    help="do not time-stamp ccx's output lines (needs stdbuf) for a breakdown")
     ap.add_argument("--keep", action="store_true",
                     help="keep the .frd, .12d and spooles.out files (removed after reading)")
     args = ap.parse_args()

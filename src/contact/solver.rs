@@ -92,6 +92,36 @@ pub struct State {
     pub pilot_f: [f64; 2],
 }
 
+/// One iteration's data for [`ContactSystem::newton_system`].
+#[derive(Clone, Copy)]
+pub struct Iterate<'a> {
+    pub w0: &'a [f64],
+    pub drive: [PilotDrive; 2],
+    pub law: Option<&'a FrictionLaw>,
+    pub prev: &'a State,
+    /// Current forces μ = (F_n, F_t, z).
+    pub mu: &'a [f64],
+    pub status: &'a [Status],
+    /// Slip direction per node (sign of the master's tangential force).
+    pub sign: &'a [f64],
+    pub method: Method,
+    pub eps: &'a [f64],
+    pub fbar_n: &'a [f64],
+    pub fbar_t: &'a [f64],
+}
+
+/// The linear system of one Newton iteration.
+pub struct NewtonSystem {
+    pub a: Mat<f64>,
+    pub b: Mat<f64>,
+    /// μ index of each unknown.
+    pub unk: Vec<usize>,
+    /// Slip nodes whose tangential force is substituted (`s μ F_n`).
+    pub substituted: Vec<bool>,
+    /// Per node: (μ_k, μ'_k, Δv_k, σ) of the slip linearisation.
+    pub slip_lin: Vec<(f64, f64, f64, f64)>,
+}
+
 /// The condensed contact operator.
 pub struct ContactSystem {
     pub ns: usize,
@@ -190,12 +220,17 @@ impl ContactSystem {
 
     /// Solves one load step from the committed state `prev`, with the condensed load `w0`
     /// (from the bodies' loads), the pilot drive, and friction law `law` (`None`: frictionless).
+    ///
+    /// `guess`: predicted forces for this step (e.g. extrapolated from the last two steps); the
+    /// first active sets are taken from it instead of from the committed state.
+    #[allow(clippy::too_many_arguments)]
     pub fn solve_step(
         &self,
         w0: &[f64],
         drive: [PilotDrive; 2],
         law: Option<&FrictionLaw>,
         prev: &State,
+        guess: Option<&State>,
         opt: &Options,
     ) -> Result<StepOutcome, ContactError> {
         let ns = self.ns;
@@ -204,10 +239,11 @@ impl ContactSystem {
         let c = self.c;
         let eps: Vec<f64> = self.eps_unit.iter().map(|e| e * opt.kappa).collect();
         // Unknowns μ = (F_n, F_t, z); warm start from the committed state.
+        let start = guess.unwrap_or(prev);
         let mut mu = vec![0.0; m];
-        mu[..ns].copy_from_slice(&prev.f_n);
-        mu[ns..2 * ns].copy_from_slice(&prev.f_t);
-        mu[2 * ns..].copy_from_slice(&prev.z);
+        mu[..ns].copy_from_slice(&start.f_n);
+        mu[ns..2 * ns].copy_from_slice(&start.f_t);
+        mu[2 * ns..].copy_from_slice(&start.z);
         // Multiplier estimates of the augmented Lagrangian.
         let mut fbar_n = prev.f_n.clone();
         let mut fbar_t = prev.f_t.clone();
@@ -227,18 +263,19 @@ impl ContactSystem {
             }
         }
         // Slip directions of the warm start: the sign of the committed tangential force.
-        let mut sign: Vec<f64> = prev
+        let mut sign: Vec<f64> = start
             .f_t
             .iter()
             .map(|f| if *f < 0.0 { -1.0 } else { 1.0 })
             .collect();
         let mut last_update = f64::INFINITY;
-        let mut first = true;
+        let mut solved = false;
         for it in 1..=opt.max_iterations {
             let y = self.y(w0, &mu);
-            // Sets from the current iterate (the first iteration keeps the warm-start sets).
+            // Sets from the current iterate (without a guess, the first iteration keeps the
+            // committed sets).
             let mut changes = 0;
-            if !first {
+            if solved || guess.is_some() {
                 for j in 0..ns {
                     let gap = self.gap0[j] + y[j];
                     let dv = y[ns + j] - prev.v[j];
@@ -273,7 +310,8 @@ impl ContactSystem {
                 // With the sets unchanged the last linear solve is the answer when the equations
                 // are linear in the sets (constant μ); a slip-dependent μ also needs a small update.
                 let linear = law.is_none_or(|l| matches!(l, FrictionLaw::Constant { .. }));
-                let converged_inner = changes == 0 && (linear || last_update <= opt.tolerance);
+                let converged_inner =
+                    solved && changes == 0 && (linear || last_update <= opt.tolerance);
                 if converged_inner {
                     if opt.method == Method::AugmentedLagrangian {
                         // Outer update: stop when the penetration is small.
@@ -298,128 +336,28 @@ impl ContactSystem {
                     });
                 }
             }
-            first = false;
-            // Slip nodes whose μ does not change with slip at the iterate (constant law, or past
-            // the weakening): their tangential force is s μ F_n exactly, so it is substituted
-            // rather than solved for.
-            let mut slip_lin = vec![(0.0, 0.0, 0.0, 0.0); ns]; // (μ_k, μ'_k, Δv_k, σ)
-            let mut substituted = vec![false; ns];
-            if let Some(law) = law {
-                for j in 0..ns {
-                    if status[j] == Status::Slip {
-                        let dv_k = self.y_at(w0, &mu, ns + j) - prev.v[j];
-                        let u_k = prev.slip[j] + dv_k.abs();
-                        let dmu = law.dmu_du(u_k).unwrap_or(0.0);
-                        let sigma = if dv_k != 0.0 { dv_k.signum() } else { -sign[j] };
-                        slip_lin[j] = (law.mu(u_k), dmu, dv_k, sigma);
-                        substituted[j] = dmu == 0.0 || mu[j] == 0.0;
-                    }
-                }
-            }
-            // Unknowns of this iteration, and how each μ component maps onto them:
-            // (μ index, unknown position, factor).
-            let mut pos = vec![usize::MAX; m];
-            let mut unk = Vec::new();
-            let mut cols: Vec<(usize, usize, f64)> = Vec::new();
-            for j in 0..ns {
-                if status[j] != Status::Open {
-                    pos[j] = unk.len();
-                    cols.push((j, unk.len(), 1.0));
-                    unk.push(j);
-                }
-            }
-            if law.is_some() {
-                for j in 0..ns {
-                    if status[j] == Status::Open {
-                        continue;
-                    }
-                    if substituted[j] {
-                        cols.push((ns + j, pos[j], sign[j] * slip_lin[j].0));
-                    } else {
-                        pos[ns + j] = unk.len();
-                        cols.push((ns + j, unk.len(), 1.0));
-                        unk.push(ns + j);
-                    }
-                }
-            }
-            for k in 0..self.kg.len() {
-                pos[2 * ns + k] = unk.len();
-                cols.push((2 * ns + k, unk.len(), 1.0));
-                unk.push(2 * ns + k);
-            }
-            let nu = unk.len();
-            let mut a = Mat::<f64>::zeros(nu, nu);
-            let mut b = Mat::<f64>::zeros(nu, 1);
-            // Row i of W over the unknowns; W is symmetric, so read its column i (contiguous).
-            let wrow = |a: &mut Mat<f64>, r: usize, i: usize, scale: f64| {
-                let col = self.w.col(i);
-                for &(mi, q, f) in &cols {
-                    a[(r, q)] += scale * f * col[mi];
-                }
+            solved = true;
+            let it_ctx = Iterate {
+                w0,
+                drive,
+                law,
+                prev,
+                mu: &mu,
+                status: &status,
+                sign: &sign,
+                method: opt.method,
+                eps: &eps,
+                fbar_n: &fbar_n,
+                fbar_t: &fbar_t,
             };
-            for (r, &u) in unk.iter().enumerate() {
-                if u < ns {
-                    let j = u;
-                    let rhs = -(self.gap0[j] + w0[j]);
-                    match opt.method {
-                        Method::Newton => {
-                            wrow(&mut a, r, j, 1.0);
-                            b[(r, 0)] = rhs;
-                        }
-                        Method::Penalty | Method::AugmentedLagrangian => {
-                            // F_n + ε ĝ = F̄ (F̄ = 0 for the penalty method)
-                            a[(r, r)] += 1.0;
-                            wrow(&mut a, r, j, eps[j]);
-                            let fb = if opt.method == Method::Penalty { 0.0 } else { fbar_n[j] };
-                            b[(r, 0)] = fb + eps[j] * rhs;
-                        }
-                    }
-                } else if u < 2 * ns {
-                    let j = u - ns;
-                    let vrhs = prev.v[j] - w0[u]; // Δv̂ = 0 ⇔ (W μ)_t = v_old − w0_t
-                    match status[j] {
-                        Status::Stick => match opt.method {
-                            Method::Newton => {
-                                wrow(&mut a, r, u, 1.0);
-                                b[(r, 0)] = vrhs;
-                            }
-                            Method::Penalty | Method::AugmentedLagrangian => {
-                                // F_t = F̄_t − ε Δv̂
-                                a[(r, r)] += 1.0;
-                                wrow(&mut a, r, u, eps[j]);
-                                let fb = if opt.method == Method::Penalty { prev.f_t[j] } else { fbar_t[j] };
-                                b[(r, 0)] = fb - eps[j] * (w0[u] - prev.v[j]);
-                            }
-                        },
-                        Status::Slip => {
-                            // F_t = s μ(U + |Δv̂|) F_n, linearised at the current iterate:
-                            // F_t − s μ_k F_n − s F_n,k μ'_k σ (Δv̂ − Δv̂_k) = 0.
-                            let (mu_k, dmu, dv_k, sigma) = slip_lin[j];
-                            let s_j = sign[j];
-                            a[(r, r)] += 1.0;
-                            a[(r, pos[j])] -= s_j * mu_k;
-                            let coef = s_j * mu[j] * dmu * sigma;
-                            wrow(&mut a, r, u, -coef);
-                            b[(r, 0)] = coef * (w0[u] - prev.v[j] - dv_k);
-                        }
-                        Status::Open => unreachable!(),
-                    }
-                } else {
-                    let k = u - 2 * ns;
-                    let d = if self.has_pilot && k < 2 { drive[k] } else { PilotDrive::Force(0.0) };
-                    match d {
-                        PilotDrive::Force(f) => {
-                            a[(r, r)] += 1.0;
-                            wrow(&mut a, r, u, -self.kg[k]);
-                            b[(r, 0)] = f + self.kg[k] * w0[u];
-                        }
-                        PilotDrive::Displacement(d) => {
-                            wrow(&mut a, r, u, 1.0);
-                            b[(r, 0)] = d - w0[u];
-                        }
-                    }
-                }
-            }
+            let NewtonSystem {
+                a,
+                b,
+                unk,
+                substituted,
+                slip_lin,
+            } = self.newton_system(&it_ctx);
+            let nu = unk.len();
             let x = a.partial_piv_lu().solve(&b);
             if (0..nu).any(|i| !x[(i, 0)].is_finite()) {
                 return Err(ContactError::Singular(format!(
@@ -448,6 +386,214 @@ impl ContactSystem {
             mu = new_mu;
         }
         unreachable!("the loop returns")
+    }
+
+    /// The Newton system of one iteration with the sets fixed: `A x = b` over the unknowns
+    /// `unk` (μ indices), with the tangential force of `substituted` slip nodes folded into
+    /// their normal force column.
+    pub fn newton_system(&self, it: &Iterate) -> NewtonSystem {
+        let Iterate {
+            w0,
+            drive,
+            law,
+            prev,
+            mu,
+            status,
+            sign,
+            method,
+            eps,
+            fbar_n,
+            fbar_t,
+        } = *it;
+        let ns = self.ns;
+        let m = self.m();
+        let opt_method = method;
+        // Slip nodes whose μ does not change with slip at the iterate (constant law, or past
+        // the weakening): their tangential force is s μ F_n exactly, so it is substituted
+        // rather than solved for.
+        let mut slip_lin = vec![(0.0, 0.0, 0.0, 0.0); ns]; // (μ_k, μ'_k, Δv_k, σ)
+        let mut substituted = vec![false; ns];
+        if let Some(law) = law {
+            for j in 0..ns {
+                if status[j] == Status::Slip {
+                    let dv_k = self.y_at(w0, mu, ns + j) - prev.v[j];
+                    let u_k = prev.slip[j] + dv_k.abs();
+                    let dmu = law.dmu_du(u_k).unwrap_or(0.0);
+                    let sigma = if dv_k != 0.0 { dv_k.signum() } else { -sign[j] };
+                    slip_lin[j] = (law.mu(u_k), dmu, dv_k, sigma);
+                    substituted[j] = dmu == 0.0 || mu[j] == 0.0;
+                }
+            }
+        }
+        // Unknowns of this iteration, and how each μ component maps onto them:
+        // (μ index, unknown position, factor).
+        let mut pos = vec![usize::MAX; m];
+        let mut unk = Vec::new();
+        let mut cols: Vec<(usize, usize, f64)> = Vec::new();
+        for j in 0..ns {
+            if status[j] != Status::Open {
+                pos[j] = unk.len();
+                cols.push((j, unk.len(), 1.0));
+                unk.push(j);
+            }
+        }
+        if law.is_some() {
+            for j in 0..ns {
+                if status[j] == Status::Open {
+                    continue;
+                }
+                if substituted[j] {
+                    cols.push((ns + j, pos[j], sign[j] * slip_lin[j].0));
+                } else {
+                    pos[ns + j] = unk.len();
+                    cols.push((ns + j, unk.len(), 1.0));
+                    unk.push(ns + j);
+                }
+            }
+        }
+        for k in 0..self.kg.len() {
+            pos[2 * ns + k] = unk.len();
+            cols.push((2 * ns + k, unk.len(), 1.0));
+            unk.push(2 * ns + k);
+        }
+        let nu = unk.len();
+        let mut a = Mat::<f64>::zeros(nu, nu);
+        let mut b = Mat::<f64>::zeros(nu, 1);
+        // Row i of W over the unknowns; W is symmetric, so read its column i (contiguous).
+        let wrow = |a: &mut Mat<f64>, r: usize, i: usize, scale: f64| {
+            let col = self.w.col(i);
+            for &(mi, q, f) in &cols {
+                a[(r, q)] += scale * f * col[mi];
+            }
+        };
+        for (r, &u) in unk.iter().enumerate() {
+            if u < ns {
+                let j = u;
+                let rhs = -(self.gap0[j] + w0[j]);
+                match opt_method {
+                    Method::Newton => {
+                        wrow(&mut a, r, j, 1.0);
+                        b[(r, 0)] = rhs;
+                    }
+                    Method::Penalty | Method::AugmentedLagrangian => {
+                        // F_n + ε ĝ = F̄ (F̄ = 0 for the penalty method)
+                        a[(r, r)] += 1.0;
+                        wrow(&mut a, r, j, eps[j]);
+                        let fb = if opt_method == Method::Penalty {
+                            0.0
+                        } else {
+                            fbar_n[j]
+                        };
+                        b[(r, 0)] = fb + eps[j] * rhs;
+                    }
+                }
+            } else if u < 2 * ns {
+                let j = u - ns;
+                let vrhs = prev.v[j] - w0[u]; // Δv̂ = 0 ⇔ (W μ)_t = v_old − w0_t
+                match status[j] {
+                    Status::Stick => match opt_method {
+                        Method::Newton => {
+                            wrow(&mut a, r, u, 1.0);
+                            b[(r, 0)] = vrhs;
+                        }
+                        Method::Penalty | Method::AugmentedLagrangian => {
+                            // F_t = F̄_t − ε Δv̂
+                            a[(r, r)] += 1.0;
+                            wrow(&mut a, r, u, eps[j]);
+                            let fb = if opt_method == Method::Penalty {
+                                prev.f_t[j]
+                            } else {
+                                fbar_t[j]
+                            };
+                            b[(r, 0)] = fb - eps[j] * (w0[u] - prev.v[j]);
+                        }
+                    },
+                    Status::Slip => {
+                        // F_t = s μ(U + |Δv̂|) F_n, linearised at the current iterate:
+                        // F_t − s μ_k F_n − s F_n,k μ'_k σ (Δv̂ − Δv̂_k) = 0.
+                        let (mu_k, dmu, dv_k, sigma) = slip_lin[j];
+                        let s_j = sign[j];
+                        a[(r, r)] += 1.0;
+                        a[(r, pos[j])] -= s_j * mu_k;
+                        let coef = s_j * mu[j] * dmu * sigma;
+                        wrow(&mut a, r, u, -coef);
+                        b[(r, 0)] = coef * (w0[u] - prev.v[j] - dv_k);
+                    }
+                    Status::Open => unreachable!(),
+                }
+            } else {
+                let k = u - 2 * ns;
+                let d = if self.has_pilot && k < 2 {
+                    drive[k]
+                } else {
+                    PilotDrive::Force(0.0)
+                };
+                match d {
+                    PilotDrive::Force(f) => {
+                        a[(r, r)] += 1.0;
+                        wrow(&mut a, r, u, -self.kg[k]);
+                        b[(r, 0)] = f + self.kg[k] * w0[u];
+                    }
+                    PilotDrive::Displacement(d) => {
+                        wrow(&mut a, r, u, 1.0);
+                        b[(r, 0)] = d - w0[u];
+                    }
+                }
+            }
+        }
+        NewtonSystem {
+            a,
+            b,
+            unk,
+            substituted,
+            slip_lin,
+        }
+    }
+
+    /// The residual of the Newton method's equations for the fixed sets of `it`, at the
+    /// unknowns `x` (ordered as `unk` of [`Self::newton_system`]): its Jacobian is `A`.
+    pub fn newton_residual(&self, it: &Iterate, sys: &NewtonSystem, x: &[f64]) -> Vec<f64> {
+        let ns = self.ns;
+        let mut mu = vec![0.0; self.m()];
+        for (q, &u) in sys.unk.iter().enumerate() {
+            mu[u] = x[q];
+        }
+        let law = it.law;
+        for j in 0..ns {
+            if sys.substituted[j] && it.status[j] == Status::Slip {
+                mu[ns + j] = it.sign[j] * sys.slip_lin[j].0 * mu[j];
+            }
+        }
+        let y = self.y(it.w0, &mu);
+        sys.unk
+            .iter()
+            .map(|&u| {
+                if u < ns {
+                    self.gap0[u] + y[u]
+                } else if u < 2 * ns {
+                    let j = u - ns;
+                    let dv = y[u] - it.prev.v[j];
+                    match it.status[j] {
+                        Status::Stick => dv,
+                        _ => {
+                            let l = law.expect("friction");
+                            mu[u] - it.sign[j] * l.mu(it.prev.slip[j] + dv.abs()) * mu[j]
+                        }
+                    }
+                } else {
+                    let k = u - 2 * ns;
+                    let d = if self.has_pilot && k < 2 {
+                        it.drive[k]
+                    } else {
+                        PilotDrive::Force(0.0)
+                    };
+                    match d {
+                        PilotDrive::Force(f) => mu[u] - self.kg[k] * y[u] - f,
+                        PilotDrive::Displacement(d) => y[u] - d,
+                    }
+                }
+            })
+            .collect()
     }
 
     fn eps_h(&self, j: usize) -> f64 {

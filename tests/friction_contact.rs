@@ -1,0 +1,411 @@
+//! Frictional mortar contact on the VM272 half-cylinders against the paper's closed forms
+//! (`stickslip::analytic`, an independent implementation of the paper's equations):
+//! * Cattaneo–Mindlin (constant μ = 0.2, Q = 0.936 N/mm; vm272.md: c/a = 0.729);
+//! * the abrupt static→dynamic transition of §3 (step law with Δ far below the mesh size:
+//!   Cattaneo–Mindlin with f = f_d);
+//! * the double Cattaneo–Mindlin solution of Figs. 2 and 3 (ramp and step laws);
+//! * convergence in the load-step count;
+//! * finite-difference checks of the Newton Jacobian for the ramp and exponential laws.
+//! The shipped cases are run as they are, or with the mesh or step count changed.
+
+mod common;
+use common::{repo, tempdir};
+use serde_json::{Value, json};
+use stickslip::analytic::cattaneo::CattaneoMindlin;
+use stickslip::analytic::dcm::DoubleCm;
+use stickslip::analytic::hertz::{Geometry, Hertz};
+
+/// Nodal results along the slave face at the last step: (x, p, q, status).
+struct Face {
+    x: Vec<f64>,
+    p: Vec<f64>,
+    q: Vec<f64>,
+    c: f64,
+    b: f64,
+}
+
+/// Runs a case (the shipped file with `edit` applied) and reads its last step.
+fn run(case: &str, name: &str, edit: &dyn Fn(&mut Value)) -> Face {
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(repo().join("cases").join(case)).unwrap())
+            .unwrap();
+    v["mesh"] = json!(
+        repo()
+            .join("meshes")
+            .join(v["mesh"].as_str().unwrap().trim_start_matches("../meshes/"))
+            .to_str()
+            .unwrap()
+    );
+    v["output"] = json!({"vtu": true, "every": 100000});
+    edit(&mut v);
+    let dir = tempdir(name);
+    let path = dir.join(case);
+    std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
+    let out = dir.join("out");
+    let st = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args([
+            "run",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .status()
+        .unwrap();
+    assert!(st.success(), "{case} failed");
+    let hist = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let header: Vec<&str> = hist.lines().next().unwrap().split(',').collect();
+    let last: Vec<f64> = hist
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let col = |n: &str| last[header.iter().position(|h| *h == n).unwrap()];
+    let step = last[0] as usize;
+    let csv = std::fs::read_to_string(out.join(format!("contact_{step:04}.csv"))).unwrap();
+    let mut f = Face {
+        x: vec![],
+        p: vec![],
+        q: vec![],
+        c: col("c"),
+        b: col("b"),
+    };
+    for l in csv.lines().skip(1) {
+        let r: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+        f.x.push(r[0]);
+        f.p.push(r[2]);
+        f.q.push(r[3]);
+    }
+    f
+}
+
+fn hertz() -> Hertz {
+    Hertz::new(Geometry::vm272(), 10.0).unwrap()
+}
+
+fn with_mesh(level: usize) -> impl Fn(&mut Value) {
+    move |v: &mut Value| {
+        v["mesh"] = json!(
+            repo()
+                .join(format!("meshes/vm272_L{level}.msh"))
+                .to_str()
+                .unwrap()
+        )
+    }
+}
+
+/// Largest |q − q_ref|/scale over |x| ≤ a, skipping |x| within `skip` of each listed boundary
+/// and within two elements of the contact edge |x| = a, where the pressure itself carries the
+/// edge error bounded by the Hertz test over |x| ≤ 0.95a (q = μ p there).
+fn worst(f: &Face, q_ref: &dyn Fn(f64) -> f64, scale: f64, skip: &[(f64, f64)]) -> f64 {
+    let a = hertz().a;
+    let elem = a / 102.4;
+    f.x.iter()
+        .zip(&f.q)
+        .filter(|(x, _)| {
+            x.abs() <= a - 2.0 * elem && skip.iter().all(|(edge, w)| (x.abs() - edge).abs() > *w)
+        })
+        .map(|(x, q)| (q - q_ref(*x)).abs() / scale)
+        .fold(0.0, f64::max)
+}
+
+/// Cattaneo–Mindlin on the finest mesh: c/a within 1 % of 0.729; q within 2 % of μ p0 except
+/// within two elements of |x| = c; the pressure unchanged by the tangential load (β = 0).
+#[test]
+fn cattaneo_mindlin_on_the_finest_mesh() {
+    let h = hertz();
+    let mu = 0.2;
+    let f = run("vm272_cm.json", "cm5", &with_mesh(5));
+    let cm = CattaneoMindlin::new(h, mu).unwrap();
+    let c = cm.stick_half_width(0.936).unwrap();
+    let elem = h.a / 102.4;
+    let e = worst(&f, &|x| cm.traction(x, c), mu * h.p0, &[(c, 2.0 * elem)]);
+    let p_dev =
+        f.x.iter()
+            .zip(&f.p)
+            .filter(|(x, _)| x.abs() <= 0.95 * h.a)
+            .map(|(x, p)| (p - h.pressure(*x)).abs() / h.p0)
+            .fold(0.0, f64::max);
+    println!(
+        "C–M L5: c/a = {:.4} (closed form {:.4}), max |q − q_CM|/(μ p0) = {e:.4}, max |p − p_H|/p0 = {p_dev:.4}",
+        f.c / h.a,
+        c / h.a
+    );
+    assert!((f.c / c - 1.0).abs() < 0.01, "c = {} vs {c}", f.c);
+    assert!(e < 0.02, "shear deviation {e}");
+    assert!(
+        p_dev < 0.01,
+        "pressure deviation after tangential loading {p_dev}"
+    );
+    // The pressure before the tangential load (normal stage only) is the same to round-off.
+    let n = run("vm272_cm.json", "cm5n", &|v: &mut Value| {
+        with_mesh(5)(v);
+        v["stages"].as_array_mut().unwrap().truncate(1);
+    });
+    let change =
+        n.p.iter()
+            .zip(&f.p)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+            / h.p0;
+    println!("pressure change during tangential loading: {change:.2e} p0");
+    assert!(change < 0.005, "pressure changed by {change} p0");
+}
+
+/// §3: a step law whose Δ is far below the element size gives Cattaneo–Mindlin with f = f_d.
+/// In the continuum the stick zone shrinks to the f_d solution because any excess of stick
+/// would carry a square-root stress singularity at its edge; on a mesh that singularity is
+/// capped at the element scale, so a sliver of extra stick survives and vanishes as h → 0.
+/// Asserted: the stick semi-width error falls with each refinement and is below 5 % on the
+/// finest mesh, and the traction outside two elements of |x| = c matches within 2 % of f_d p0.
+#[test]
+fn abrupt_transition_gives_cattaneo_mindlin_with_the_dynamic_coefficient() {
+    let h = hertz();
+    let cm = CattaneoMindlin::abrupt(h, 0.15, 0.1).unwrap();
+    let c = cm.stick_half_width(0.8).unwrap();
+    let mut errs = Vec::new();
+    let mut last = None;
+    for level in [3, 4, 5] {
+        let f = run("fig2.json", &format!("abrupt{level}"), &|v: &mut Value| {
+            with_mesh(level)(v);
+            v["contact"]["friction"] =
+                json!({"shape": "step", "fs": 0.15, "fd": 0.1, "delta": 1e-9});
+            v["stages"][1]["steps"] = json!(10);
+        });
+        errs.push(f.c / c - 1.0);
+        last = Some(f);
+    }
+    let f = last.unwrap();
+    let e = worst(
+        &f,
+        &|x| cm.traction(x, c),
+        0.1 * h.p0,
+        &[(c, 2.0 * h.a / 102.4)],
+    );
+    println!(
+        "abrupt: c/c_CM(f_d) − 1 on L3, L4, L5: {errs:?}; L5 max |q − q_CM|/(f_d p0) = {e:.4}"
+    );
+    assert!(errs[0] > errs[1] && errs[1] > errs[2], "{errs:?}");
+    assert!(errs[2].abs() < 0.05, "{errs:?}");
+    assert!(e < 0.02, "{e}");
+}
+
+/// Fig. 2 (ramp, Λ = 0.05, Q = 0.8 f_d P) as shipped: c within 2 % of the double C–M c, and
+/// the traction within 3 % of f_d p0 of eq. (qx2CM) outside the transition zone c < |x| < b.
+#[test]
+fn figure_2_matches_double_cattaneo_mindlin() {
+    let h = hertz();
+    let f = run("fig2.json", "fig2", &|_| {});
+    let dcm = DoubleCm::new(h, 0.15, 0.1).unwrap();
+    let s = dcm.solve_delta(0.8, 2.8966e-4).unwrap();
+    let elem = h.a / 102.4;
+    let e = worst(
+        &f,
+        &|x| {
+            if x.abs() > s.c && x.abs() < s.b {
+                f64::NAN
+            } else {
+                dcm.traction(x, s.c, s.b)
+            }
+        },
+        0.1 * h.p0,
+        &[(s.c, 2.0 * elem), (s.b, 2.0 * elem)],
+    );
+    println!(
+        "Fig. 2: c/a = {:.4} (double C–M {:.4}), b/a = {:.4} ({:.4}); max |q − q_2CM|/(f_d p0) outside c<|x|<b: {e:.4}",
+        f.c / h.a,
+        s.c / h.a,
+        f.b / h.a,
+        s.b / h.a
+    );
+    assert!((f.c / s.c - 1.0).abs() < 0.02, "c = {} vs {}", f.c, s.c);
+    assert!(!(e > 0.03), "traction deviation {e}");
+    assert!((f.b / s.b - 1.0).abs() < 0.03, "b = {} vs {}", f.b, s.b);
+}
+
+/// Fig. 3 (Λ = 0.277, Q = 0.9 f_d P): ramp and step laws give stick zones within 2 % of each
+/// other and close tractions (the paper's point). Against the double C–M closed form the FE
+/// stick zone is 3–5 % smaller here (measured: ramp −4.4 %, step −2.8 %; converged in mesh and
+/// step count): with the transition zone reaching b ≈ 0.94a, eq. (qx2CM) with W taken at p(c) is
+/// itself an approximation. Asserted within 6 %.
+#[test]
+fn figure_3_ramp_and_step_agree() {
+    let h = hertz();
+    let ramp = run("fig3_ramp.json", "fig3r", &|_| {});
+    let step = run("fig3_step.json", "fig3s", &|_| {});
+    let dcm = DoubleCm::new(h, 0.15, 0.1).unwrap();
+    let s = dcm.solve_delta(0.9, 1.605e-3).unwrap();
+    let n = ramp.q.len() as f64;
+    let rms = (ramp
+        .q
+        .iter()
+        .zip(&step.q)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        / n)
+        .sqrt()
+        / (0.1 * h.p0);
+    println!(
+        "Fig. 3: c/a ramp {:.4}, step {:.4}, double C–M {:.4}; RMS |q_ramp − q_step|/(f_d p0) = {rms:.4}",
+        ramp.c / h.a,
+        step.c / h.a,
+        s.c / h.a
+    );
+    assert!((ramp.c / step.c - 1.0).abs() < 0.02);
+    assert!((ramp.c / s.c - 1.0).abs() < 0.06);
+    assert!((step.c / s.c - 1.0).abs() < 0.06);
+    assert!(rms < 0.06, "ramp and step differ by {rms} f_d p0 (RMS)");
+}
+
+/// Halving the load step changes the Fig. 2 traction by less than 0.5 % of f_d p0.
+#[test]
+fn figure_2_is_converged_in_the_step_count() {
+    let h = hertz();
+    let a = run("fig2.json", "fig2-40", &with_mesh(4));
+    let b = run("fig2.json", "fig2-80", &|v: &mut Value| {
+        with_mesh(4)(v);
+        v["stages"][1]["steps"] = json!(80);
+    });
+    let d =
+        a.q.iter()
+            .zip(&b.q)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+            / (0.1 * h.p0);
+    println!("Fig. 2 on L4, 40 vs 80 tangential steps: max |Δq|/(f_d p0) = {d:.5}");
+    assert!(d < 0.005, "{d}");
+}
+
+/// Finite-difference check of the Newton Jacobian with slip-dependent μ: at an iterate inside
+/// a step with nodes in the transition zone, the assembled matrix equals the finite difference
+/// of the residual of the same equations (relative to its largest entry: 1e-7 on the contact
+/// rows, 1e-5 on the pilot rows, whose two cancelling terms cost digits to round-off).
+#[test]
+fn newton_jacobian_matches_finite_differences() {
+    use stickslip::case::{Case, Control};
+    use stickslip::contact::solver::{Iterate, Method, Options, Status};
+    use stickslip::friction::FrictionLaw;
+    for law in [
+        FrictionLaw::ramp(0.15, 0.1, 2e-3).unwrap(),
+        FrictionLaw::exponential(0.15, 0.1, 2e-3).unwrap(),
+    ] {
+        let mut v: Value =
+            serde_json::from_str(&std::fs::read_to_string(repo().join("cases/fig2.json")).unwrap())
+                .unwrap();
+        v["mesh"] = json!(repo().join("meshes/vm272_L1.msh").to_str().unwrap());
+        let case: Case = serde_json::from_value(v).unwrap();
+        let model = stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap();
+        let cm = model.contact.as_ref().unwrap();
+        let opt = Options {
+            method: Method::Newton,
+            kappa: 100.0,
+            max_iterations: 80,
+            tolerance: 1e-12,
+        };
+        let mut st = cm.system.initial_state();
+        for q in [0.0, 0.3, 0.6] {
+            st = model
+                .solve_contact_step(
+                    0.0,
+                    [Control::Force(q), Control::Force(-10.0)],
+                    &st,
+                    None,
+                    &opt,
+                    Some(&law),
+                )
+                .unwrap()
+                .1
+                .state;
+        }
+        // An iterate of the next step: the committed forces, sets and slip signs of a solve at
+        // a higher load, so that transition nodes have Δv ≠ 0 and μ' ≠ 0.
+        let next = model
+            .solve_contact_step(
+                0.0,
+                [Control::Force(0.7), Control::Force(-10.0)],
+                &st,
+                None,
+                &opt,
+                Some(&law),
+            )
+            .unwrap()
+            .1
+            .state;
+        let ns = cm.system.ns;
+        let mut mu: Vec<f64> = next
+            .f_n
+            .iter()
+            .chain(&next.f_t)
+            .chain(&next.z)
+            .copied()
+            .collect();
+        // Move off the solution a little so that the residual is not zero.
+        for (k, m) in mu.iter_mut().enumerate() {
+            *m *= 1.0 + 1e-3 * ((k % 7) as f64 - 3.0);
+        }
+        let sign: Vec<f64> = next
+            .f_t
+            .iter()
+            .map(|f| if *f < 0.0 { -1.0 } else { 1.0 })
+            .collect();
+        let w0 = vec![0.0; mu.len()];
+        let eps = vec![0.0; ns];
+        let zeros = vec![0.0; ns];
+        let it = Iterate {
+            w0: &w0,
+            drive: [
+                stickslip::contact::solver::PilotDrive::Force(0.7),
+                stickslip::contact::solver::PilotDrive::Force(-10.0),
+            ],
+            law: Some(&law),
+            prev: &st,
+            mu: &mu,
+            status: &next.status,
+            sign: &sign,
+            method: Method::Newton,
+            eps: &eps,
+            fbar_n: &zeros,
+            fbar_t: &zeros,
+        };
+        let sys = cm.system.newton_system(&it);
+        let transition = (0..ns)
+            .filter(|&j| next.status[j] == Status::Slip && !sys.substituted[j])
+            .count();
+        assert!(transition > 0, "{law:?}: no slip node with μ' ≠ 0");
+        let x0: Vec<f64> = sys.unk.iter().map(|&u| mu[u]).collect();
+        let r0 = cm.system.newton_residual(&it, &sys, &x0);
+        let mut worst: f64 = 0.0;
+        let mut worst_at = (0, 0, 0.0, 0.0);
+        let scale = sys.a.norm_max();
+        for q in 0..x0.len() {
+            let hq = 1e-6 * x0[q].abs().max(1e-3);
+            let mut xp = x0.clone();
+            xp[q] += hq;
+            let mut xm = x0.clone();
+            xm[q] -= hq;
+            let (rp, rm) = (
+                cm.system.newton_residual(&it, &sys, &xp),
+                cm.system.newton_residual(&it, &sys, &xm),
+            );
+            for r in 0..x0.len() {
+                let fd = (rp[r] - rm[r]) / (2.0 * hq);
+                // The pilot rows carry z − k_g u_P, two large terms that cancel: their finite
+                // differences lose digits to round-off, so they get a looser bound below.
+                let pilot_row = sys.unk[r] >= 2 * ns;
+                let e = (fd - sys.a[(r, q)]).abs() / scale * if pilot_row { 0.01 } else { 1.0 };
+                if e > worst {
+                    worst = e;
+                    worst_at = (sys.unk[r], sys.unk[q], fd, sys.a[(r, q)]);
+                }
+            }
+        }
+        println!(
+            "{law:?}: {} unknowns, {transition} slip nodes with μ' ≠ 0; max |J_FD − J|/max|J| = {worst:.2e} at {worst_at:?}; residual {:.2e}",
+            x0.len(),
+            r0.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+        );
+        assert!(worst < 1e-7, "{worst} at {worst_at:?}");
+    }
+}
