@@ -88,9 +88,9 @@ pub struct ContactSpec {
     /// Lagrangian; default 100).
     #[serde(default)]
     pub penalty: Option<f64>,
-    /// Friction law of the accumulated slip; absent = frictionless.
+    /// Friction law of the accumulated slip; absent = frictionless. See [`FrictionSpec`].
     #[serde(default)]
-    pub friction: Option<crate::friction::FrictionLaw>,
+    pub friction: Option<FrictionSpec>,
     /// Slave edges with an initial gap up to this value are contact candidates (default
     /// 0.5 % of the slave face's bounding-box diagonal; doubled automatically if the contact
     /// reaches the edge of the zone).
@@ -107,6 +107,127 @@ pub struct ContactSpec {
     /// Relative tolerance of the contact iteration (default 1e-10).
     #[serde(default)]
     pub tolerance: Option<f64>,
+}
+
+/// A friction law in a case file, one of:
+/// * a law: `{"shape": "constant", "mu": 0.2}`, `{"shape": "ramp"|"step"|"exponential", "fs",
+///   "fd", "delta"}` or `{"shape": "table", "rows": [[slip, mu], …]}`;
+/// * a Rabinowicz pair of the paper's Table 1: `{"preset": "copper-mild-steel", "shape": "ramp"}`
+///   (shape optional, default ramp; Δ in mm);
+/// * a shaped law with Δ through the paper's Λ = R Δ/((f_s − f_d) a²):
+///   `{"shape": "ramp", "fs", "fd", "lambda", "radius", "load"}` where `radius` is the effective
+///   radius R and `load` the normal load P that set `a = sqrt(4PR/(πE*))` (E* of the pair).
+#[derive(Clone, Debug, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum FrictionSpec {
+    Law(crate::friction::FrictionLaw),
+    Preset {
+        preset: String,
+        shape: Option<String>,
+    },
+    Lambda {
+        shape: String,
+        fs: f64,
+        fd: f64,
+        lambda: f64,
+        radius: f64,
+        load: f64,
+    },
+}
+
+impl<'de> Deserialize<'de> for FrictionSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let v = serde_json::Value::deserialize(d)?;
+        let obj = v
+            .as_object()
+            .ok_or_else(|| D::Error::custom("a friction law must be an object"))?;
+        let num = |k: &str| -> Result<f64, D::Error> {
+            obj.get(k)
+                .and_then(|x| x.as_f64())
+                .ok_or_else(|| D::Error::custom(format!("friction: `{k}` (a number) is required")))
+        };
+        if let Some(p) = obj.get("preset") {
+            for k in obj.keys() {
+                if k != "preset" && k != "shape" {
+                    return Err(D::Error::custom(format!(
+                        "friction: unknown field `{k}` with `preset` (expected `shape`)"
+                    )));
+                }
+            }
+            let preset = p
+                .as_str()
+                .ok_or_else(|| D::Error::custom("friction: `preset` must be a name"))?
+                .to_string();
+            let shape = obj.get("shape").and_then(|x| x.as_str()).map(String::from);
+            return Ok(FrictionSpec::Preset { preset, shape });
+        }
+        if obj.contains_key("lambda") {
+            for k in obj.keys() {
+                if !["shape", "fs", "fd", "lambda", "radius", "load"].contains(&k.as_str()) {
+                    return Err(D::Error::custom(format!(
+                        "friction: unknown field `{k}` with `lambda` (expected shape, fs, fd, lambda, radius, load)"
+                    )));
+                }
+            }
+            let shape = obj
+                .get("shape")
+                .and_then(|x| x.as_str())
+                .ok_or_else(|| D::Error::custom("friction: `shape` is required"))?
+                .to_string();
+            return Ok(FrictionSpec::Lambda {
+                shape,
+                fs: num("fs")?,
+                fd: num("fd")?,
+                lambda: num("lambda")?,
+                radius: num("radius")?,
+                load: num("load")?,
+            });
+        }
+        serde_json::from_value::<crate::friction::FrictionLaw>(v)
+            .map(FrictionSpec::Law)
+            .map_err(|e| D::Error::custom(format!("friction: {e}")))
+    }
+}
+
+impl FrictionSpec {
+    /// The law, with Δ from Λ resolved with the pair's composite modulus `e_star`.
+    pub fn resolve(&self, e_star: f64) -> Result<crate::friction::FrictionLaw, String> {
+        use crate::friction::{FrictionLaw, Shape};
+        let shape = |s: &str| match s {
+            "ramp" => Ok(Shape::Ramp),
+            "step" => Ok(Shape::Step),
+            "exponential" => Ok(Shape::Exponential),
+            other => Err(format!(
+                "friction: shape `{other}` is not one of ramp, step, exponential"
+            )),
+        };
+        match self {
+            FrictionSpec::Law(l) => Ok(l.clone()),
+            FrictionSpec::Preset { preset, shape: s } => {
+                FrictionLaw::preset_shaped(preset, shape(s.as_deref().unwrap_or("ramp"))?)
+                    .map_err(|e| format!("friction: {e}"))
+            }
+            FrictionSpec::Lambda {
+                shape: s,
+                fs,
+                fd,
+                lambda,
+                radius,
+                load,
+            } => {
+                for (k, v) in [("lambda", lambda), ("radius", radius), ("load", load)] {
+                    if !(*v > 0.0 && v.is_finite()) {
+                        return Err(format!("friction: `{k}` = {v} must be > 0"));
+                    }
+                }
+                let a2 = 4.0 * load * radius / (std::f64::consts::PI * e_star);
+                let delta = lambda * (fs - fd) * a2 / radius;
+                FrictionLaw::shaped(shape(s)?, *fs, *fd, delta)
+                    .map_err(|e| format!("friction: {e}"))
+            }
+        }
+    }
 }
 
 /// How the contact normal is chosen.

@@ -72,6 +72,8 @@ pub struct Model {
     pub f_prescribed: Vec<f64>,
     /// Active nodes (used by some active triangle).
     pub active: Vec<bool>,
+    /// The friction law of the contact pair (resolved from the case), if any.
+    pub friction: Option<crate::friction::FrictionLaw>,
     /// The contact pair on the condensed system, if the case has one.
     pub contact: Option<crate::contact::ContactModel>,
     /// Condensed contact loads `w0` of the tractions at scale 1 and of the prescribed
@@ -307,6 +309,15 @@ impl Model {
         let contact = pair.map(|p| {
             crate::contact::ContactModel::new(p, &dofs, &condensed, e_star.expect("with pair"))
         });
+        let friction = match (&case.contact, e_star) {
+            (Some(cs), Some(es)) => cs
+                .friction
+                .as_ref()
+                .map(|f| f.resolve(es))
+                .transpose()
+                .map_err(ModelError::Unsupported)?,
+            _ => None,
+        };
         let contact_w0 = match &contact {
             Some(c) => [
                 c.w0(&condensed, &condensed.reduce(&f_traction)),
@@ -326,6 +337,7 @@ impl Model {
             f_traction,
             f_prescribed,
             active,
+            friction,
             contact,
             contact_w0,
             timings: timings.clone(),

@@ -102,6 +102,30 @@ pub struct StepRecord {
     pub wall_s: f64,
 }
 
+/// The friction law and the paper's scales of the run (eqs. Maugis, Maugis10, Lambda, s0).
+#[derive(Clone, Debug, Serialize)]
+pub struct FrictionSummary {
+    pub law: crate::friction::FrictionLaw,
+    pub f_s: f64,
+    pub f_d: Option<f64>,
+    /// Slip length Δ and fracture energy per unit pressure W/p (slip-weakening laws).
+    pub delta: Option<f64>,
+    pub w_over_p: Option<f64>,
+    /// Normal load P (contact force along the common normal at the last step), effective
+    /// radius R (fitted to the initial gap, g0 ≈ t²/2R) and Hertz semi-width a.
+    pub load: f64,
+    pub radius: f64,
+    pub a_hertz: f64,
+    pub lambda: Option<f64>,
+    pub chi: Option<f64>,
+    pub psi: Option<f64>,
+    /// Small-scale transition length at the centre, s0 = 2Λa/π, over a.
+    pub s0_over_a: Option<f64>,
+    /// Largest slave element in the contact, and whether it resolves s0 (h ≤ s0/2).
+    pub h_contact: f64,
+    pub resolved: Option<bool>,
+}
+
 /// What `summary.json` holds.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
@@ -121,6 +145,7 @@ pub struct Summary {
     pub contact_solve_s: f64,
     pub newton_iterations: usize,
     pub peak_memory_mib: Option<f64>,
+    pub friction: Option<FrictionSummary>,
     pub steps: Vec<StepRecord>,
     pub output_dir: String,
     /// `completed`, or why the run stopped early.
@@ -410,7 +435,7 @@ pub fn run_model(
         .map(|s| s.to_string_lossy().to_string())
         .unwrap_or("case".into());
     let has_pilot = model.dofs.pilot.is_some();
-    let law = case.contact.as_ref().and_then(|c| c.friction.clone());
+    let law = model.friction.clone();
     let copt = case.contact.as_ref().map(|c| solver::Options {
         method: c.method,
         kappa: c.penalty.unwrap_or(100.0),
@@ -687,6 +712,7 @@ pub fn run_model(
         contact_solve_s: t_contact,
         newton_iterations: newton_total,
         peak_memory_mib: output::peak_memory_bytes().map(|b| b as f64 / (1024.0 * 1024.0)),
+        friction: friction_summary(&model, records.last().and_then(|r| r.contact)),
         steps: records,
         output_dir: out_dir.display().to_string(),
         status: match &failure {
@@ -700,6 +726,15 @@ pub fn run_model(
             .expect("serialisable")
             .as_bytes(),
     )?;
+    if let Some(fr) = &summary.friction {
+        if fr.resolved == Some(false) && !opts.quiet {
+            eprintln!(
+                "warning: the contact elements (h = {:.3e}) are larger than s0/2 = {:.3e}: the slip-weakening transition zone is not resolved; use a finer mesh along the faces",
+                fr.h_contact,
+                fr.s0_over_a.unwrap_or(0.0) * fr.a_hertz / 2.0
+            );
+        }
+    }
     if let Some(m) = failure {
         return Err(RunError::Solve(m));
     }
@@ -727,6 +762,81 @@ pub fn run_model(
         }
     }
     Ok(summary)
+}
+
+/// The friction summary of a run: the law's Δ and W/p and the paper's scales Λ, χ, Ψ, s0 for
+/// the load the run reached.
+fn friction_summary(model: &Model, last: Option<ContactFigures>) -> Option<FrictionSummary> {
+    let law = model.friction.clone()?;
+    let cm = model.contact.as_ref()?;
+    let fig = last?;
+    let n0 = cm.pair.common_normal.unwrap_or([0.0, 1.0]);
+    let load = (fig.fx * n0[0] + fig.fy * n0[1]).abs();
+    // Effective radius from the initial gaps of the zone nodes: g0 ≈ t²/(2R), t along the face.
+    let m = &cm.pair.mortar;
+    let j0 =
+        (0..m.gap0.len()).min_by(|&a, &b| m.gap0[a].partial_cmp(&m.gap0[b]).expect("finite"))?;
+    let x0 = model.mesh.nodes[m.slave_nodes[j0]];
+    let tau = [n0[1], -n0[0]];
+    let (mut s4, mut s2g) = (0.0, 0.0);
+    let t_of = |j: usize| {
+        let x = model.mesh.nodes[m.slave_nodes[j]];
+        (x[0] - x0[0]) * tau[0] + (x[1] - x0[1]) * tau[1]
+    };
+    for j in 0..m.gap0.len() {
+        let t = t_of(j);
+        s4 += t.powi(4);
+        s2g += t * t * (m.gap0[j] - m.gap0[j0]);
+    }
+    let radius = if s2g > 0.0 {
+        s4 / (2.0 * s2g)
+    } else {
+        f64::INFINITY
+    };
+    let a_hertz = (4.0 * load * radius / (std::f64::consts::PI * cm.e_star)).sqrt();
+    let fs = law.f_static();
+    let fd = law.f_dynamic().ok();
+    let weakening = fd.filter(|fd| fs > *fd);
+    let delta = weakening.and_then(|_| law.delta().ok());
+    let w_over_p = weakening.and_then(|_| law.w_over_p().ok());
+    let lambda = match (weakening, delta) {
+        (Some(fd), Some(d)) if a_hertz > 0.0 => Some(radius * d / ((fs - fd) * a_hertz * a_hertz)),
+        _ => None,
+    };
+    let ratio = weakening.map(|fd| fs / fd - 1.0);
+    let chi = lambda.zip(ratio).map(|(l, r)| r * l);
+    let psi = lambda.zip(ratio).map(|(l, r)| r * r * l);
+    let s0_over_a = lambda.map(|l| 2.0 * l / std::f64::consts::PI);
+    let h_contact = cm
+        .pair
+        .zone_edges
+        .iter()
+        .filter(|e| {
+            let x = model.mesh.nodes[e[2]];
+            ((x[0] - x0[0]) * tau[0] + (x[1] - x0[1]) * tau[1]).abs() <= a_hertz
+        })
+        .map(|e| {
+            let (p, q) = (model.mesh.nodes[e[0]], model.mesh.nodes[e[1]]);
+            (p[0] - q[0]).hypot(p[1] - q[1])
+        })
+        .fold(0.0, f64::max);
+    let resolved = s0_over_a.map(|s| h_contact <= 0.5 * s * a_hertz);
+    Some(FrictionSummary {
+        law,
+        f_s: fs,
+        f_d: fd,
+        delta,
+        w_over_p,
+        load,
+        radius,
+        a_hertz,
+        lambda,
+        chi,
+        psi,
+        s0_over_a,
+        h_contact,
+        resolved,
+    })
 }
 
 /// Per slave node: (p, q, gap, slip, slip increment, status, μ, q/p).

@@ -1,0 +1,122 @@
+//! Bad contact input: a clear message naming the key or group, a non-zero exit status, and no
+//! output. And the mesh-resolution warning of a slip-weakening run whose elements are larger
+//! than s0/2.
+
+mod common;
+use common::{repo, tempdir};
+use serde_json::{Value, json};
+
+fn run_edited(name: &str, edit: &dyn Fn(&mut Value)) -> (i32, String, bool) {
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(repo().join("cases/hertz.json")).unwrap())
+            .unwrap();
+    v["mesh"] = json!(repo().join("meshes/vm272_L0.msh").to_str().unwrap());
+    edit(&mut v);
+    let dir = tempdir(name);
+    std::fs::write(
+        dir.join("case.json"),
+        serde_json::to_string_pretty(&v).unwrap(),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args([
+            "run",
+            dir.join("case.json").to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stderr).into(),
+        out.exists(),
+    )
+}
+
+fn refused(name: &str, edit: &dyn Fn(&mut Value), needles: &[&str]) {
+    let (code, err, wrote) = run_edited(name, edit);
+    assert_eq!(code, 2, "{name}: {err}");
+    for n in needles {
+        assert!(err.contains(n), "{name}: `{n}` not in: {err}");
+    }
+    assert!(!wrote, "{name}: output written");
+}
+
+#[test]
+fn bad_contact_input_is_named() {
+    refused(
+        "same",
+        &|v| v["contact"]["master"] = json!("lower_arc"),
+        &["contact.master", "must differ"],
+    );
+    refused(
+        "nogroup",
+        &|v| v["contact"]["slave"] = json!("arc"),
+        &["`arc` is not in the mesh"],
+    );
+    refused(
+        "penalty",
+        &|v| v["contact"]["penalty"] = json!(-1.0),
+        &["contact.penalty"],
+    );
+    refused(
+        "method",
+        &|v| v["contact"]["method"] = json!("lagrange"),
+        &["unknown variant `lagrange`"],
+    );
+    refused(
+        "shape",
+        &|v| v["contact"]["friction"] = json!({"shape": "linear", "fs": 0.2}),
+        &["friction", "linear"],
+    );
+    refused(
+        "preset",
+        &|v| v["contact"]["friction"] = json!({"preset": "gold-gold"}),
+        &["gold-gold"],
+    );
+    refused(
+        "fd>fs",
+        &|v| {
+            v["contact"]["friction"] = json!({"shape": "ramp", "fs": 0.1, "fd": 0.2, "delta": 1e-3})
+        },
+        &["friction"],
+    );
+    refused(
+        "table",
+        &|v| v["contact"]["friction"] = json!({"shape": "table", "rows": [[0.0, 0.2]]}),
+        &["friction"],
+    );
+    refused(
+        "lambda",
+        &|v| {
+            v["contact"]["friction"] =
+                json!({"shape": "ramp", "fs": 0.15, "fd": 0.1, "lambda": 0.05, "radius": 4.0})
+        },
+        &["`load`"],
+    );
+    // A zone that cannot be found: the faces are far apart for this tiny candidate gap.
+    refused(
+        "zone",
+        &|v| {
+            v["contact"]["slave"] = json!("bottom");
+            v["supports"] = json!([{"group": "lower_arc", "ux": 0.0, "uy": 0.0}]);
+            v["contact"]["candidate_gap"] = json!(1e-6);
+        },
+        &["no slave node of `bottom`"],
+    );
+}
+
+#[test]
+fn unresolved_transition_zone_is_warned_about() {
+    let (code, err, _) = run_edited("warn", &|v| {
+        v["contact"]["friction"] = json!({"shape": "ramp", "fs": 0.15, "fd": 0.1, "lambda": 0.05, "radius": 4.0, "load": 10.0});
+        v["stages"] = json!([{"steps": 1, "pilot_x": {"force": 0.0}, "pilot_y": {"force": -10.0}}, {"steps": 2, "pilot_x": {"force": 0.4}}]);
+    });
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("warning: the contact elements") && err.contains("not resolved"),
+        "{err}"
+    );
+}
