@@ -104,7 +104,8 @@ pub struct ContactSpec {
     /// Newton iterations per step before the step is cut back (default 60).
     #[serde(default)]
     pub max_iterations: Option<usize>,
-    /// Relative tolerance of the contact iteration (default 1e-10).
+    /// Relative tolerance of the contact iteration: the largest force update over the largest
+    /// force (default 1e-8).
     #[serde(default)]
     pub tolerance: Option<f64>,
 }

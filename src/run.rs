@@ -440,7 +440,7 @@ pub fn run_model(
         method: c.method,
         kappa: c.penalty.unwrap_or(100.0),
         max_iterations: c.max_iterations.unwrap_or(60),
-        tolerance: c.tolerance.unwrap_or(1e-10),
+        tolerance: c.tolerance.unwrap_or(1e-8),
     });
     let mut cstate = model.contact.as_ref().map(|c| c.system.initial_state());
     let mut control = [Control::Force(0.0); 2];
