@@ -13,12 +13,24 @@ fn main() {
     let tmp = std::env::temp_dir().join(format!("stickslip-bench-contact-{}", std::process::id()));
     std::fs::create_dir_all(&tmp).unwrap();
     let threads = std::env::var("STICKSLIP_THREADS").unwrap_or_else(|_| "2".into());
-    let level: usize = std::env::var("STICKSLIP_LEVEL").ok().and_then(|s| s.parse().ok()).unwrap_or(5);
-    println!("| case | steps | Newton its | read | assemble | analyse | factorise | condense (W) | contact Newton | other solve | write | total | total / (assemble+analyse+factorise) | peak MiB |");
+    let level: usize = std::env::var("STICKSLIP_LEVEL")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(5);
+    println!(
+        "| case | steps | Newton its | read | assemble | analyse | factorise | condense (W) | contact Newton | other solve | write | total | total / (assemble+analyse+factorise) | peak MiB |"
+    );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for case in ["hertz", "vm272_cm", "fig2", "fig3_ramp", "fig3_step"] {
-        let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(repo.join(format!("cases/{case}.json"))).unwrap()).unwrap();
-        v["mesh"] = serde_json::json!(repo.join(format!("meshes/vm272_L{level}.msh")).to_str().unwrap());
+        let mut v: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(repo.join(format!("cases/{case}.json"))).unwrap(),
+        )
+        .unwrap();
+        v["mesh"] = serde_json::json!(
+            repo.join(format!("meshes/vm272_L{level}.msh"))
+                .to_str()
+                .unwrap()
+        );
         v["output"] = serde_json::json!({"vtu": true, "every": 100000});
         if case == "vm272_cm" {
             v["stages"][1]["steps"] = serde_json::json!(40);
@@ -28,16 +40,32 @@ fn main() {
         let out = tmp.join(case);
         let t = std::time::Instant::now();
         let st = Command::new(env!("CARGO_BIN_EXE_stickslip"))
-            .args(["run", path.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet", "--threads", &threads])
+            .args([
+                "run",
+                path.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "--quiet",
+                "--threads",
+                &threads,
+            ])
             .status()
             .unwrap();
         let wall = t.elapsed().as_secs_f64();
         assert!(st.success(), "{case} failed");
-        let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
         let g = |k: &str| s["timings_s"][k].as_f64().unwrap();
         let newton = s["contact_solve_s"].as_f64().unwrap();
         let floor = g("assemble") + g("analyse") + g("factorise");
-        let total = g("read") + g("assemble") + g("analyse") + g("factorise") + g("condense") + g("solve") + g("write");
+        let total = g("read")
+            + g("assemble")
+            + g("analyse")
+            + g("factorise")
+            + g("condense")
+            + g("solve")
+            + g("write");
         println!(
             "| {case} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} (process {wall:.2}) | {:.2} | {:.0} |",
             s["steps"].as_array().unwrap().len(),
@@ -55,6 +83,8 @@ fn main() {
             s["peak_memory_mib"].as_f64().unwrap()
         );
     }
-    println!("\n(mesh level {level}; threads: {threads}; seconds; `condense` builds the Delassus operator W on the contact unknowns; `other solve` is the recovery of the full field at each step)");
+    println!(
+        "\n(mesh level {level}; threads: {threads}; seconds; `condense` builds the Delassus operator W on the contact unknowns; `other solve` is the recovery of the full field at each step)"
+    );
     let _ = std::fs::remove_dir_all(&tmp);
 }

@@ -187,7 +187,8 @@ impl Model {
             .collect()
     }
 
-    /// Solves one load step with contact from the committed state `prev`.
+    /// Solves one load step with contact from the committed state `prev` (the contact unknowns
+    /// only; [`Model::contact_displacement`] recovers the full field when it is wanted).
     pub fn solve_contact_step(
         &self,
         scale: f64,
@@ -196,7 +197,7 @@ impl Model {
         guess: Option<&State>,
         opt: &solver::Options,
         law: Option<&crate::friction::FrictionLaw>,
-    ) -> Result<(Vec<f64>, solver::StepOutcome), ContactError> {
+    ) -> Result<solver::StepOutcome, ContactError> {
         let cm = self.contact.as_ref().expect("contact model");
         let w0: Vec<f64> = self.contact_w0[0]
             .iter()
@@ -207,10 +208,15 @@ impl Model {
             Control::Force(f) => PilotDrive::Force(f),
             Control::Displacement(d) => PilotDrive::Displacement(d),
         });
-        let out = cm.system.solve_step(&w0, drive, law, prev, guess, opt)?;
-        let r = cm.retained_forces(&out.state, self.dofs.n_retained);
-        let u = self.condensed.recover_total(&self.load(scale), &r);
-        Ok((u, out))
+        cm.system.solve_step(&w0, drive, law, prev, guess, opt)
+    }
+
+    /// The displacement of all free DOFs for a contact state at traction scale `scale`: one
+    /// solve with the factorised stiffness.
+    pub fn contact_displacement(&self, scale: f64, st: &State) -> Vec<f64> {
+        let cm = self.contact.as_ref().expect("contact model");
+        let r = cm.retained_forces(st, self.dofs.n_retained);
+        self.condensed.recover_total(&self.load(scale), &r)
     }
 
     /// Contact figures of a state.
@@ -508,7 +514,7 @@ pub fn run_model(
                     model.solve_contact_step(sc, ctl, prev, guess.as_ref(), opt, law.as_ref());
                 t_contact += tc.elapsed().as_secs_f64();
                 match res {
-                    Ok((u, out)) => {
+                    Ok(out) => {
                         let p = PilotState {
                             ux: out.state.pilot_u[0],
                             uy: out.state.pilot_u[1],
@@ -536,7 +542,7 @@ pub fn run_model(
                         }
                         older = cstate.take().map(|c| (alpha, c));
                         cstate = Some(out.state);
-                        (u, has_pilot.then_some(p), it)
+                        (None, has_pilot.then_some(p), it)
                     }
                     Err(e) => {
                         if cutbacks < MAX_CUTBACKS {
@@ -559,14 +565,24 @@ pub fn run_model(
                 }
             } else {
                 match model.solve_step(sc, ctl) {
-                    Ok((u, p)) => (u, p, 0),
+                    Ok((u, p)) => (Some(u), p, 0),
                     Err(m) => {
                         failure = Some(format!("step {}: {m}", step + 1));
                         break 'stages;
                     }
                 }
             };
-            if u.iter().any(|v| !v.is_finite()) {
+            let finite = match (&u, &cstate) {
+                (Some(u), _) => u.iter().all(|v| v.is_finite()),
+                (None, Some(st)) => st
+                    .f_n
+                    .iter()
+                    .chain(&st.f_t)
+                    .chain(&st.z)
+                    .all(|v| v.is_finite()),
+                (None, None) => true,
+            };
+            if !finite {
                 failure = Some(format!("step {}: the solution is not finite", step + 1));
                 break 'stages;
             }
@@ -598,6 +614,11 @@ pub fn run_model(
             if case.output.vtu && (step % case.output.every == 0 || last) {
                 let t = Instant::now();
                 let name = format!("{stem}_{step:04}.vtu");
+                let u = match (u, &cstate) {
+                    (Some(u), _) => u,
+                    (None, Some(st)) => model.contact_displacement(scale, st),
+                    (None, None) => unreachable!("a step has a solution or a contact state"),
+                };
                 let bytes = bodies_vtu(&model, &u, case).map_err(|e| RunError::Write {
                     path: name.clone(),
                     source: std::io::Error::other(e.to_string()),

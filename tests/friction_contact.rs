@@ -316,7 +316,6 @@ fn newton_jacobian_matches_finite_differences() {
                     Some(&law),
                 )
                 .unwrap()
-                .1
                 .state;
         }
         // An iterate of the next step: the committed forces, sets and slip signs of a solve at
@@ -331,7 +330,6 @@ fn newton_jacobian_matches_finite_differences() {
                 Some(&law),
             )
             .unwrap()
-            .1
             .state;
         let ns = cm.system.ns;
         let mut mu: Vec<f64> = next

@@ -43,7 +43,7 @@ fn solve_model(model: &Model, load: f64, method: Method, kappa: f64) -> Solution
         tolerance: 1e-10,
     };
     let prev = cm.system.initial_state();
-    let (_, out) = model
+    let out = model
         .solve_contact_step(
             0.0,
             [Control::Force(0.0), Control::Force(-load)],
