@@ -12,8 +12,8 @@ For every requested mesh level k this script
      (*CONTACT FILE, CSTR/CDIS) at the end of the normal-load step and of the tangential step;
   4. scores them against the half-space closed forms (Hertz, Cattaneo-Mindlin) of
      shared/reference/vm272.md;
-  5. writes results/L{k}.json, a CSV of (x, p, q, status) per step, and appends a JSON line per
-     run to <out>/results.jsonl (also printed on stdout).
+  5. writes <out>/L{k}/contact_L{k}.csv (x, p, q, status, ... per slave node and step) and
+     appends one JSON object per run to <out>/results.jsonl (also printed on stdout).
 
 Load steps (see docs/calculix.md):
   step 1: pilot uy = -delta0 (prescribed, tiny) with ux = 0: closes the point contact so the
