@@ -27,10 +27,21 @@ pub enum RunError {
         "the contact reached the edge of the candidate zone (candidate gap {gap:e}) at step {step}"
     )]
     ZoneClipped { gap: f64, step: usize },
+    #[error(
+        "equilibrium lost (gross sliding): the tangential load cannot exceed Q_max = {q_max:.6} \
+         (bracketed to [{q_max:.6}, {q_fail:.6}] by {cutbacks} bisections); the output holds the \
+         state just before it"
+    )]
+    EquilibriumLost {
+        q_max: f64,
+        q_fail: f64,
+        cutbacks: usize,
+    },
 }
 
 impl RunError {
-    /// Process exit status: 2 for bad input, 3 for a solver failure, 4 for output errors.
+    /// Process exit status: 2 for bad input, 3 for a solver failure, 4 for output errors, 5 when
+    /// a force-controlled tangential load passes the largest load the contact can carry.
     pub fn exit_code(&self) -> i32 {
         match self {
             RunError::Case(_)
@@ -46,6 +57,7 @@ impl RunError {
             | RunError::Solve(_)
             | RunError::ZoneClipped { .. } => 3,
             RunError::Write { .. } => 4,
+            RunError::EquilibriumLost { .. } => 5,
         }
     }
 }
@@ -124,6 +136,14 @@ pub struct FrictionSummary {
     /// Largest slave element in the contact, and whether it resolves s0 (h ≤ s0/2).
     pub h_contact: f64,
     pub resolved: Option<bool>,
+    /// The largest tangential load reached (|pilot force| along the tangent), and the apparent
+    /// static friction coefficient Q_max/P it implies.
+    pub q_max: f64,
+    pub apparent_friction: f64,
+    /// Closed-form predictions of Q_max/P: the JKR limit (eq. QJKR at its maximum, with Ψ) and
+    /// the double Cattaneo–Mindlin maximum (with Λ).
+    pub apparent_friction_jkr: Option<f64>,
+    pub apparent_friction_dcm: Option<f64>,
 }
 
 /// What `summary.json` holds.
@@ -458,6 +478,8 @@ pub fn run_model(
     let (mut t_solve, mut t_write, mut t_contact) = (0.0, 0.0, 0.0);
     let mut newton_total = 0;
     let mut failure: Option<String> = None;
+    let mut bracket: Option<(f64, f64)> = None;
+    let mut lost_equilibrium: Option<(f64, f64)> = None;
     const MAX_CUTBACKS: usize = 12;
     'stages: for (si, stage) in case.stages.iter().enumerate() {
         let start = (pilot, scale, control);
@@ -545,6 +567,20 @@ pub fn run_model(
                         (None, has_pilot.then_some(p), it)
                     }
                     Err(e) => {
+                        // A force-controlled tangential load that no equilibrium carries: the
+                        // cutbacks bisect between the last converged load and this one.
+                        let lost = matches!(ctl[0], Control::Force(_))
+                            && matches!(target[0], Some(Control::Force(_)))
+                            && law.is_some();
+                        if lost {
+                            bracket = Some((
+                                pilot.fx,
+                                match ctl[0] {
+                                    Control::Force(f) => f,
+                                    Control::Displacement(_) => f64::NAN,
+                                },
+                            ));
+                        }
                         if cutbacks < MAX_CUTBACKS {
                             cutbacks += 1;
                             dalpha *= 0.5;
@@ -560,6 +596,7 @@ pub fn run_model(
                             "step {}: {e} (after {MAX_CUTBACKS} cutbacks)",
                             step + 1
                         ));
+                        lost_equilibrium = bracket;
                         break 'stages;
                     }
                 }
@@ -733,12 +770,23 @@ pub fn run_model(
         contact_solve_s: t_contact,
         newton_iterations: newton_total,
         peak_memory_mib: output::peak_memory_bytes().map(|b| b as f64 / (1024.0 * 1024.0)),
-        friction: friction_summary(&model, records.last().and_then(|r| r.contact)),
+        friction: friction_summary(
+            &model,
+            records.last().and_then(|r| r.contact),
+            records
+                .iter()
+                .filter_map(|r| r.pilot)
+                .map(|p| p.fx.abs())
+                .fold(0.0, f64::max),
+        ),
         steps: records,
         output_dir: out_dir.display().to_string(),
-        status: match &failure {
-            None => "completed".into(),
-            Some(m) => format!("failed at {m}; the output holds the steps before it"),
+        status: match (&failure, lost_equilibrium) {
+            (None, _) => "completed".into(),
+            (Some(_), Some((q, qf))) => {
+                format!("equilibrium lost: Q_max = {q:.6} (no equilibrium at {qf:.6})")
+            }
+            (Some(m), None) => format!("failed at {m}; the output holds the steps before it"),
         },
     };
     wr(
@@ -755,6 +803,13 @@ pub fn run_model(
                 fr.s0_over_a.unwrap_or(0.0) * fr.a_hertz / 2.0
             );
         }
+    }
+    if let Some((q_max, q_fail)) = lost_equilibrium {
+        return Err(RunError::EquilibriumLost {
+            q_max,
+            q_fail,
+            cutbacks: MAX_CUTBACKS,
+        });
     }
     if let Some(m) = failure {
         return Err(RunError::Solve(m));
@@ -787,7 +842,11 @@ pub fn run_model(
 
 /// The friction summary of a run: the law's Δ and W/p and the paper's scales Λ, χ, Ψ, s0 for
 /// the load the run reached.
-fn friction_summary(model: &Model, last: Option<ContactFigures>) -> Option<FrictionSummary> {
+fn friction_summary(
+    model: &Model,
+    last: Option<ContactFigures>,
+    q_max: f64,
+) -> Option<FrictionSummary> {
     let law = model.friction.clone()?;
     let cm = model.contact.as_ref()?;
     let fig = last?;
@@ -842,6 +901,20 @@ fn friction_summary(model: &Model, last: Option<ContactFigures>) -> Option<Frict
         })
         .fold(0.0, f64::max);
     let resolved = s0_over_a.map(|s| h_contact <= 0.5 * s * a_hertz);
+    // Closed-form apparent friction Q_max/P (eqs. QJKR and Qx at their maxima, Fig. 6).
+    let closed = match (weakening, chi) {
+        (Some(fd), Some(chi)) => crate::analytic::apparent::apparent(chi, fs / fd, true)
+            .ok()
+            .map(|p| (p.q_max_jkr * fd, p.q_max_dcm.map(|q| q * fd))),
+        _ => None,
+    };
+    let apparent_friction_jkr = closed
+        .map(|c| c.0)
+        .or(if weakening.is_none() { fd } else { None });
+    let apparent_friction_dcm =
+        closed
+            .and_then(|c| c.1)
+            .or(if weakening.is_none() { fd } else { None });
     Some(FrictionSummary {
         law,
         f_s: fs,
@@ -857,6 +930,10 @@ fn friction_summary(model: &Model, last: Option<ContactFigures>) -> Option<Frict
         s0_over_a,
         h_contact,
         resolved,
+        q_max,
+        apparent_friction: if load > 0.0 { q_max / load } else { 0.0 },
+        apparent_friction_jkr,
+        apparent_friction_dcm,
     })
 }
 

@@ -358,8 +358,22 @@ impl ContactSystem {
                 slip_lin,
             } = self.newton_system(&it_ctx);
             let nu = unk.len();
-            let x = a.partial_piv_lu().solve(&b);
-            if (0..nu).any(|i| !x[(i, 0)].is_finite()) {
+            let lu = a.partial_piv_lu();
+            let x = lu.solve(&b);
+            // A singular system (a body free to slide once every node slips, or a direction
+            // nothing holds) still gives a finite answer from a backward-stable LU: judge it by
+            // the smallest pivot against the largest.
+            let mut bad = (0..nu).any(|i| !x[(i, 0)].is_finite());
+            if !bad && nu > 0 {
+                let u = lu.U();
+                let d: Vec<f64> = (0..nu).map(|i| u[(i, i)].abs()).collect();
+                let (lo, hi) = (
+                    d.iter().cloned().fold(f64::INFINITY, f64::min),
+                    d.iter().cloned().fold(0.0, f64::max),
+                );
+                bad = lo <= 1e-12 * hi;
+            }
+            if bad {
                 return Err(ContactError::Singular(format!(
                     "{} unknowns, {} in contact; a body may be free to move in a direction no contact or support holds",
                     nu,
