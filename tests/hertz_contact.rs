@@ -46,7 +46,7 @@ fn solve_model(model: &Model, load: f64, method: Method, kappa: f64) -> Solution
     let out = model
         .solve_contact_step(
             0.0,
-            [Control::Force(0.0), Control::Force(-load)],
+            [Control::Displacement(0.0), Control::Force(-load)],
             &prev,
             None,
             &opt,
