@@ -444,24 +444,44 @@ fn wr(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
     })
 }
 
-/// Steps through the stages of a built model, writing output to `out_dir`.
-pub fn run_model(
+/// One converged step, handed to the caller of [`simulate`].
+pub struct StepEvent<'a> {
+    pub step: usize,
+    pub time: f64,
+    pub scale: f64,
+    /// Whether this is the last step of the last stage.
+    pub last: bool,
+    /// The free solution, where the step computed it (runs without contact).
+    pub u: Option<&'a Vec<f64>>,
+    /// The contact state (runs with contact; the full field is recovered on demand).
+    pub contact: Option<&'a State>,
+}
+
+/// What [`simulate`] returns.
+pub struct Simulation {
+    pub records: Vec<StepRecord>,
+    /// Why the run stopped early, if it did.
+    pub failure: Option<String>,
+    /// (Q_max, the load at which no equilibrium was found) when a force-controlled tangential
+    /// load passed the peak.
+    pub lost_equilibrium: Option<(f64, f64)>,
+    pub newton_iterations: usize,
+    pub solve_s: f64,
+    pub contact_solve_s: f64,
+}
+
+/// Steps through the stages of a case on a built model with friction law `law` (overriding
+/// the model's), calling `on_step` after every converged step. Steps that do not converge are
+/// cut back (halved) up to 12 times from the last converged state.
+pub fn simulate(
+    model: &Model,
     case: &Case,
-    case_path: &Path,
-    mut model: Model,
-    out_dir: &Path,
-    opts: &RunOptions,
-) -> Result<Summary, RunError> {
-    std::fs::create_dir_all(out_dir).map_err(|source| RunError::Write {
-        path: out_dir.display().to_string(),
-        source,
-    })?;
-    let stem = case_path
-        .file_stem()
-        .map(|s| s.to_string_lossy().to_string())
-        .unwrap_or("case".into());
+    law: Option<&crate::friction::FrictionLaw>,
+    quiet: bool,
+    on_step: &mut dyn FnMut(&StepEvent) -> Result<(), RunError>,
+) -> Result<Simulation, RunError> {
     let has_pilot = model.dofs.pilot.is_some();
-    let law = model.friction.clone();
+    let law = law.cloned();
     let copt = case.contact.as_ref().map(|c| solver::Options {
         method: c.method,
         kappa: c.penalty.unwrap_or(100.0),
@@ -473,9 +493,8 @@ pub fn run_model(
     let mut pilot = PilotState::default();
     let mut scale = 0.0;
     let mut records = Vec::new();
-    let mut pvd = Vec::new();
     let mut step = 0;
-    let (mut t_solve, mut t_write, mut t_contact) = (0.0, 0.0, 0.0);
+    let (mut t_solve, mut t_contact) = (0.0, 0.0);
     let mut newton_total = 0;
     let mut failure: Option<String> = None;
     let mut bracket: Option<(f64, f64)> = None;
@@ -584,7 +603,7 @@ pub fn run_model(
                         if cutbacks < MAX_CUTBACKS {
                             cutbacks += 1;
                             dalpha *= 0.5;
-                            if !opts.quiet {
+                            if !quiet {
                                 eprintln!(
                                     "step {} of stage {si}: {e}; cutting the load increment back to {dalpha:.3e} of the stage",
                                     step + 1
@@ -648,52 +667,83 @@ pub fn run_model(
                 wall_s: wall,
             });
             let last = si + 1 == case.stages.len() && alpha >= 1.0 - 1e-12;
-            if case.output.vtu && (step % case.output.every == 0 || last) {
-                let t = Instant::now();
-                let name = format!("{stem}_{step:04}.vtu");
-                let u = match (u, &cstate) {
-                    (Some(u), _) => u,
-                    (None, Some(st)) => model.contact_displacement(scale, st),
-                    (None, None) => unreachable!("a step has a solution or a contact state"),
-                };
-                let bytes = bodies_vtu(&model, &u, case).map_err(|e| RunError::Write {
-                    path: name.clone(),
-                    source: std::io::Error::other(e.to_string()),
-                })?;
-                wr(&out_dir.join(&name), &bytes)?;
-                pvd.push(PvdEntry {
-                    time,
-                    part: 0,
-                    file: name,
-                });
-                if let Some(st) = &cstate {
-                    let cname = format!("{stem}_contact_{step:04}.vtu");
-                    let bytes = contact_vtu(&model, st).map_err(|e| RunError::Write {
-                        path: cname.clone(),
-                        source: std::io::Error::other(e.to_string()),
-                    })?;
-                    wr(&out_dir.join(&cname), &bytes)?;
-                    pvd.push(PvdEntry {
-                        time,
-                        part: 1,
-                        file: cname,
-                    });
-                    wr(
-                        &out_dir.join(format!("contact_{step:04}.csv")),
-                        contact_csv(&model, st).as_bytes(),
-                    )?;
-                }
-                wr(
-                    &out_dir.join(format!("{stem}.pvd")),
-                    output::pvd(&pvd).as_bytes(),
-                )?;
-                t_write += t.elapsed().as_secs_f64();
-            }
+            on_step(&StepEvent {
+                step,
+                time,
+                scale,
+                last,
+                u: u.as_ref(),
+                contact: cstate.as_ref(),
+            })?;
             if dalpha < nominal {
                 dalpha = (2.0 * dalpha).min(nominal);
             }
         }
     }
+    Ok(Simulation {
+        records,
+        failure,
+        lost_equilibrium,
+        newton_iterations: newton_total,
+        solve_s: t_solve,
+        contact_solve_s: t_contact,
+    })
+}
+
+/// Steps through the stages of a built model, writing output to `out_dir`.
+pub fn run_model(
+    case: &Case,
+    case_path: &Path,
+    mut model: Model,
+    out_dir: &Path,
+    opts: &RunOptions,
+) -> Result<Summary, RunError> {
+    std::fs::create_dir_all(out_dir).map_err(|source| RunError::Write {
+        path: out_dir.display().to_string(),
+        source,
+    })?;
+    let stem = case_path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or("case".into());
+    let mut pvd = Vec::new();
+    let mut t_write = 0.0;
+    let law = model.friction.clone();
+    let sim = simulate(&model, case, law.as_ref(), opts.quiet, &mut |ev: &StepEvent| {
+        let step = ev.step;
+        if !(case.output.vtu && (step % case.output.every == 0 || ev.last)) {
+            return Ok(());
+        }
+        let t = Instant::now();
+        let name = format!("{stem}_{step:04}.vtu");
+        let u = match (ev.u, ev.contact) {
+            (Some(u), _) => u.clone(),
+            (None, Some(st)) => model.contact_displacement(ev.scale, st),
+            (None, None) => unreachable!("a step has a solution or a contact state"),
+        };
+        let bytes = bodies_vtu(&model, &u, case).map_err(|e| RunError::Write {
+            path: name.clone(),
+            source: std::io::Error::other(e.to_string()),
+        })?;
+        wr(&out_dir.join(&name), &bytes)?;
+        pvd.push(PvdEntry { time: ev.time, part: 0, file: name });
+        if let Some(st) = ev.contact {
+            let cname = format!("{stem}_contact_{step:04}.vtu");
+            let bytes = contact_vtu(&model, st).map_err(|e| RunError::Write {
+                path: cname.clone(),
+                source: std::io::Error::other(e.to_string()),
+            })?;
+            wr(&out_dir.join(&cname), &bytes)?;
+            pvd.push(PvdEntry { time: ev.time, part: 1, file: cname });
+            wr(&out_dir.join(format!("contact_{step:04}.csv")), contact_csv(&model, st).as_bytes())?;
+        }
+        wr(&out_dir.join(format!("{stem}.pvd")), output::pvd(&pvd).as_bytes())?;
+        t_write += t.elapsed().as_secs_f64();
+        Ok(())
+    })?;
+    let Simulation { records, failure, lost_equilibrium, newton_iterations: newton_total, solve_s: t_solve, contact_solve_s: t_contact } = sim;
+    let step = records.len();
+    const MAX_CUTBACKS: usize = 12;
     model.timings.solve = t_solve;
     model.timings.write = t_write;
     let rows: Vec<Vec<f64>> = records
