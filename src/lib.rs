@@ -22,3 +22,4 @@ pub mod probe;
 pub mod quadrature;
 pub mod run;
 pub mod shapes;
+pub mod sweep;

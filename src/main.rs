@@ -31,6 +31,23 @@ enum Cmd {
         #[arg(long)]
         quiet: bool,
     },
+    /// Run one case against many friction laws on one shared model, in parallel, and write one
+    /// table (CSV and JSON).
+    Sweep {
+        /// The case file (JSON); its friction law is replaced by each law of the sweep.
+        case: PathBuf,
+        /// The sweep file: {"friction": [law, law, …]} with laws as in a case's
+        /// `contact.friction`.
+        sweep: PathBuf,
+        /// Output directory (default: out/<case name>_sweep).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Number of threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        #[arg(long)]
+        quiet: bool,
+    },
     /// The paper's closed forms: scalars as JSON, curves as CSV.
     Analytic(stickslip::analytic::cli::AnalyticArgs),
     /// Print counts, groups, element sizes and quality figures of a gmsh mesh (JSON).
@@ -77,6 +94,29 @@ fn main() -> ExitCode {
                 Err(e) => {
                     eprintln!("error: {e}");
                     ExitCode::from(e.exit_code() as u8)
+                }
+            }
+        }
+        Cmd::Sweep {
+            case,
+            sweep,
+            out,
+            threads,
+            quiet,
+        } => {
+            if threads == Some(0) {
+                eprintln!("error: --threads must be at least 1");
+                return ExitCode::from(2);
+            }
+            if let Err(e) = set_threads(threads) {
+                eprintln!("error: {e}");
+                return ExitCode::from(2);
+            }
+            match stickslip::sweep::run(&case, &sweep, out, quiet) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err((code, e)) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(code)
                 }
             }
         }

@@ -709,39 +709,66 @@ pub fn run_model(
     let mut pvd = Vec::new();
     let mut t_write = 0.0;
     let law = model.friction.clone();
-    let sim = simulate(&model, case, law.as_ref(), opts.quiet, &mut |ev: &StepEvent| {
-        let step = ev.step;
-        if !(case.output.vtu && (step % case.output.every == 0 || ev.last)) {
-            return Ok(());
-        }
-        let t = Instant::now();
-        let name = format!("{stem}_{step:04}.vtu");
-        let u = match (ev.u, ev.contact) {
-            (Some(u), _) => u.clone(),
-            (None, Some(st)) => model.contact_displacement(ev.scale, st),
-            (None, None) => unreachable!("a step has a solution or a contact state"),
-        };
-        let bytes = bodies_vtu(&model, &u, case).map_err(|e| RunError::Write {
-            path: name.clone(),
-            source: std::io::Error::other(e.to_string()),
-        })?;
-        wr(&out_dir.join(&name), &bytes)?;
-        pvd.push(PvdEntry { time: ev.time, part: 0, file: name });
-        if let Some(st) = ev.contact {
-            let cname = format!("{stem}_contact_{step:04}.vtu");
-            let bytes = contact_vtu(&model, st).map_err(|e| RunError::Write {
-                path: cname.clone(),
+    let sim = simulate(
+        &model,
+        case,
+        law.as_ref(),
+        opts.quiet,
+        &mut |ev: &StepEvent| {
+            let step = ev.step;
+            if !(case.output.vtu && (step % case.output.every == 0 || ev.last)) {
+                return Ok(());
+            }
+            let t = Instant::now();
+            let name = format!("{stem}_{step:04}.vtu");
+            let u = match (ev.u, ev.contact) {
+                (Some(u), _) => u.clone(),
+                (None, Some(st)) => model.contact_displacement(ev.scale, st),
+                (None, None) => unreachable!("a step has a solution or a contact state"),
+            };
+            let bytes = bodies_vtu(&model, &u, case).map_err(|e| RunError::Write {
+                path: name.clone(),
                 source: std::io::Error::other(e.to_string()),
             })?;
-            wr(&out_dir.join(&cname), &bytes)?;
-            pvd.push(PvdEntry { time: ev.time, part: 1, file: cname });
-            wr(&out_dir.join(format!("contact_{step:04}.csv")), contact_csv(&model, st).as_bytes())?;
-        }
-        wr(&out_dir.join(format!("{stem}.pvd")), output::pvd(&pvd).as_bytes())?;
-        t_write += t.elapsed().as_secs_f64();
-        Ok(())
-    })?;
-    let Simulation { records, failure, lost_equilibrium, newton_iterations: newton_total, solve_s: t_solve, contact_solve_s: t_contact } = sim;
+            wr(&out_dir.join(&name), &bytes)?;
+            pvd.push(PvdEntry {
+                time: ev.time,
+                part: 0,
+                file: name,
+            });
+            if let Some(st) = ev.contact {
+                let cname = format!("{stem}_contact_{step:04}.vtu");
+                let bytes = contact_vtu(&model, st).map_err(|e| RunError::Write {
+                    path: cname.clone(),
+                    source: std::io::Error::other(e.to_string()),
+                })?;
+                wr(&out_dir.join(&cname), &bytes)?;
+                pvd.push(PvdEntry {
+                    time: ev.time,
+                    part: 1,
+                    file: cname,
+                });
+                wr(
+                    &out_dir.join(format!("contact_{step:04}.csv")),
+                    contact_csv(&model, st).as_bytes(),
+                )?;
+            }
+            wr(
+                &out_dir.join(format!("{stem}.pvd")),
+                output::pvd(&pvd).as_bytes(),
+            )?;
+            t_write += t.elapsed().as_secs_f64();
+            Ok(())
+        },
+    )?;
+    let Simulation {
+        records,
+        failure,
+        lost_equilibrium,
+        newton_iterations: newton_total,
+        solve_s: t_solve,
+        contact_solve_s: t_contact,
+    } = sim;
     let step = records.len();
     const MAX_CUTBACKS: usize = 12;
     model.timings.solve = t_solve;
@@ -822,6 +849,7 @@ pub fn run_model(
         peak_memory_mib: output::peak_memory_bytes().map(|b| b as f64 / (1024.0 * 1024.0)),
         friction: friction_summary(
             &model,
+            model.friction.as_ref(),
             records.last().and_then(|r| r.contact),
             records
                 .iter()
@@ -892,12 +920,13 @@ pub fn run_model(
 
 /// The friction summary of a run: the law's Δ and W/p and the paper's scales Λ, χ, Ψ, s0 for
 /// the load the run reached.
-fn friction_summary(
+pub fn friction_summary(
     model: &Model,
+    law: Option<&crate::friction::FrictionLaw>,
     last: Option<ContactFigures>,
     q_max: f64,
 ) -> Option<FrictionSummary> {
-    let law = model.friction.clone()?;
+    let law = law?.clone();
     let cm = model.contact.as_ref()?;
     let fig = last?;
     let n0 = cm.pair.common_normal.unwrap_or([0.0, 1.0]);
@@ -1158,4 +1187,71 @@ pub fn bodies_vtu(model: &Model, u: &[f64], case: &Case) -> Result<Vec<u8>, vtki
         ],
         vec![vtu::Field::scalar("body_id", body)],
     )
+}
+
+/// One row of a sweep: a friction law run on the shared model.
+#[derive(Clone, Debug, Serialize)]
+pub struct SweepRow {
+    pub index: usize,
+    pub status: String,
+    pub steps: usize,
+    pub newton_iterations: usize,
+    pub wall_s: f64,
+    /// Stick and transition semi-widths at the last converged step.
+    pub c: f64,
+    pub b: f64,
+    pub friction: Option<FrictionSummary>,
+}
+
+/// Runs the stages of `case` on one built model for each friction law, in parallel, and
+/// returns one row per law (in the order given). The model (assembly, factorisation,
+/// condensation, Delassus operator) is shared.
+pub fn sweep(model: &Model, case: &Case, laws: &[crate::friction::FrictionLaw]) -> Vec<SweepRow> {
+    use rayon::prelude::*;
+    laws.par_iter()
+        .enumerate()
+        .map(|(index, law)| {
+            let t = Instant::now();
+            let res = simulate(model, case, Some(law), true, &mut |_| Ok(()));
+            let wall_s = t.elapsed().as_secs_f64();
+            match res {
+                Ok(sim) => {
+                    let last = sim.records.last().and_then(|r| r.contact);
+                    let q_max = sim
+                        .records
+                        .iter()
+                        .filter_map(|r| r.pilot)
+                        .map(|p| p.fx.abs())
+                        .fold(0.0, f64::max);
+                    let status = match (&sim.failure, sim.lost_equilibrium) {
+                        (None, _) => "completed".to_string(),
+                        (Some(_), Some((q, qf))) => {
+                            format!("equilibrium lost: Q_max = {q:.6} (none at {qf:.6})")
+                        }
+                        (Some(m), None) => format!("failed: {m}"),
+                    };
+                    SweepRow {
+                        index,
+                        status,
+                        steps: sim.records.len(),
+                        newton_iterations: sim.newton_iterations,
+                        wall_s,
+                        c: last.map_or(0.0, |f| f.c),
+                        b: last.map_or(0.0, |f| f.b),
+                        friction: friction_summary(model, Some(law), last, q_max),
+                    }
+                }
+                Err(e) => SweepRow {
+                    index,
+                    status: format!("error: {e}"),
+                    steps: 0,
+                    newton_iterations: 0,
+                    wall_s,
+                    c: 0.0,
+                    b: 0.0,
+                    friction: None,
+                },
+            }
+        })
+        .collect()
 }

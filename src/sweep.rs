@@ -1,0 +1,129 @@
+//! `stickslip sweep`: one case, many friction laws, one shared model, one table.
+
+use crate::case::{Case, FrictionSpec};
+use crate::model::Model;
+use crate::output;
+use crate::run::{self, SweepRow};
+use std::path::{Path, PathBuf};
+
+/// The sweep file.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepFile {
+    /// Friction laws, each as a case's `contact.friction`.
+    pub friction: Vec<FrictionSpec>,
+}
+
+/// Runs a sweep from the command line. Errors carry the exit status.
+pub fn run(
+    case_path: &Path,
+    sweep_path: &Path,
+    out: Option<PathBuf>,
+    quiet: bool,
+) -> Result<(), (u8, String)> {
+    let bad = |e: String| (2u8, e);
+    let case = Case::load(case_path).map_err(|e| bad(e.to_string()))?;
+    if case.contact.is_none() {
+        return Err(bad(format!(
+            "{}: a sweep needs a case with `contact`",
+            case_path.display()
+        )));
+    }
+    let text = std::fs::read_to_string(sweep_path).map_err(|e| {
+        bad(format!(
+            "{}: cannot read the sweep file: {e}",
+            sweep_path.display()
+        ))
+    })?;
+    let file: SweepFile =
+        serde_json::from_str(&text).map_err(|e| bad(format!("{}: {e}", sweep_path.display())))?;
+    if file.friction.is_empty() {
+        return Err(bad(format!(
+            "{}: `friction` lists no law",
+            sweep_path.display()
+        )));
+    }
+    let t = std::time::Instant::now();
+    let model = Model::build(&case, case_path).map_err(|e| bad(e.to_string()))?;
+    let e_star = model.contact.as_ref().map(|c| c.e_star).expect("contact");
+    let laws = file
+        .friction
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            f.resolve(e_star)
+                .map_err(|e| bad(format!("{}: friction[{i}]: {e}", sweep_path.display())))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let build_s = t.elapsed().as_secs_f64();
+    let t = std::time::Instant::now();
+    let rows = run::sweep(&model, &case, &laws);
+    let sweep_s = t.elapsed().as_secs_f64();
+    let out_dir = out.unwrap_or_else(|| {
+        PathBuf::from("out").join(format!(
+            "{}_sweep",
+            case_path
+                .file_stem()
+                .map(|s| s.to_string_lossy().to_string())
+                .unwrap_or_default()
+        ))
+    });
+    std::fs::create_dir_all(&out_dir).map_err(|e| (4, format!("{}: {e}", out_dir.display())))?;
+    let w = |name: &str, bytes: &[u8]| {
+        output::write_atomic(&out_dir.join(name), bytes)
+            .map_err(|e| (4u8, format!("{}: {e}", out_dir.join(name).display())))
+    };
+    w("sweep.csv", table(&rows).as_bytes())?;
+    let json = serde_json::json!({"case": case_path.display().to_string(), "build_s": build_s, "sweep_s": sweep_s, "threads": rayon::current_num_threads(), "rows": rows});
+    w(
+        "sweep.json",
+        serde_json::to_string_pretty(&json)
+            .expect("serialisable")
+            .as_bytes(),
+    )?;
+    if !quiet {
+        eprintln!(
+            "{} laws on {} ({} triangles): model built in {build_s:.2} s, sweep {sweep_s:.2} s; table in {}",
+            laws.len(),
+            case_path.display(),
+            model.elems.len(),
+            out_dir.join("sweep.csv").display()
+        );
+    }
+    Ok(())
+}
+
+/// The sweep table as CSV.
+pub fn table(rows: &[SweepRow]) -> String {
+    let mut s = String::from(
+        "index,f_s,f_d,delta,lambda,chi,psi,load,q_max,apparent_friction,apparent_friction_jkr,apparent_friction_dcm,c,b,steps,newton_iterations,wall_s,resolved,status\n",
+    );
+    let o = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.9e}"));
+    for r in rows {
+        let f = r.friction.as_ref();
+        s += &format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{},{:.9e},{:.9e},{},{},{:.4},{},\"{}\"\n",
+            r.index,
+            o(f.map(|f| f.f_s)),
+            o(f.and_then(|f| f.f_d)),
+            o(f.and_then(|f| f.delta)),
+            o(f.and_then(|f| f.lambda)),
+            o(f.and_then(|f| f.chi)),
+            o(f.and_then(|f| f.psi)),
+            o(f.map(|f| f.load)),
+            o(f.map(|f| f.q_max)),
+            o(f.map(|f| f.apparent_friction)),
+            o(f.and_then(|f| f.apparent_friction_jkr)),
+            o(f.and_then(|f| f.apparent_friction_dcm)),
+            r.c,
+            r.b,
+            r.steps,
+            r.newton_iterations,
+            r.wall_s,
+            f.and_then(|f| f.resolved)
+                .map_or(String::new(), |b| b.to_string()),
+            r.status.replace('"', "'")
+        );
+    }
+    s
+}

@@ -1,0 +1,80 @@
+//! `stickslip sweep`: one case against several friction laws on one shared model. Each law's
+//! force-controlled tangential loading passes its peak; the table reports Q_max/P, which must
+//! agree with the JKR limit (eq. QJKR at its maximum) within 2 % for Λ = 0.025, the paper's
+//! Fig. 6 regime.
+
+mod common;
+use common::{repo, tempdir};
+use serde_json::{Value, json};
+
+#[test]
+fn sweep_reports_the_apparent_friction_of_each_law() {
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(repo().join("cases/fig2.json")).unwrap())
+            .unwrap();
+    v["mesh"] = json!(repo().join("meshes/vm272_L3.msh").to_str().unwrap());
+    v["stages"][1] = json!({"steps": 30, "pilot_x": {"force": 3.0}});
+    let dir = tempdir("sweep");
+    std::fs::write(dir.join("case.json"), serde_json::to_string(&v).unwrap()).unwrap();
+    let laws: Vec<Value> = [0.12, 0.15, 0.2].iter().map(|fs| json!({"shape": "ramp", "fs": fs, "fd": 0.1, "lambda": 0.025, "radius": 4.0, "load": 10.0})).collect();
+    std::fs::write(
+        dir.join("sweep.json"),
+        json!({"friction": laws}).to_string(),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args([
+            "sweep",
+            dir.join("case.json").to_str().unwrap(),
+            dir.join("sweep.json").to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let table: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    let rows = table["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    for r in rows {
+        let f = &r["friction"];
+        let (fe, jkr) = (
+            f["apparent_friction"].as_f64().unwrap(),
+            f["apparent_friction_jkr"].as_f64().unwrap(),
+        );
+        println!("f_s = {}: Q_max/P FE {fe:.5}, JKR {jkr:.5}", f["f_s"]);
+        assert!(
+            r["status"]
+                .as_str()
+                .unwrap()
+                .starts_with("equilibrium lost"),
+            "{}",
+            r["status"]
+        );
+        assert!((fe / jkr - 1.0).abs() < 0.02, "{fe} vs {jkr}");
+    }
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 4);
+    // Bad sweep input: a clear message and exit status 2.
+    std::fs::write(
+        dir.join("bad.json"),
+        r#"{"friction": [{"shape": "ramp", "fs": 0.1, "fd": 0.2, "delta": 1e-3}]}"#,
+    )
+    .unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args([
+            "sweep",
+            dir.join("case.json").to_str().unwrap(),
+            dir.join("bad.json").to_str().unwrap(),
+            "--out",
+            dir.join("o2").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("bad.json"));
+    assert!(!dir.join("o2").exists());
+}
