@@ -587,7 +587,8 @@ pub fn simulate(
                     }
                     Err(e) => {
                         // A force-controlled tangential load that no equilibrium carries: the
-                        // cutbacks bisect between the last converged load and this one.
+                        // cutbacks bisect between the last converged load and this one; a failure
+                        // that survives all of them is reported as the loss of equilibrium.
                         let lost = matches!(ctl[0], Control::Force(_))
                             && matches!(target[0], Some(Control::Force(_)))
                             && law.is_some();
@@ -675,6 +676,8 @@ pub fn simulate(
                 u: u.as_ref(),
                 contact: cstate.as_ref(),
             })?;
+            // The cutback count is per step: the next step starts afresh.
+            cutbacks = 0;
             if dalpha < nominal {
                 dalpha = (2.0 * dalpha).min(nominal);
             }

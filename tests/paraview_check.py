@@ -197,6 +197,19 @@ def check_run_vtk(pvd, fails):
     return len(steps), report
 
 
+def composite_leaves(ds):
+    """The non-composite datasets inside a (possibly nested) multiblock."""
+    if ds is None:
+        return []
+    if ds.IsA("vtkMultiBlockDataSet") or ds.IsA("vtkMultiPieceDataSet"):
+        out = []
+        n = ds.GetNumberOfBlocks() if ds.IsA("vtkMultiBlockDataSet") else ds.GetNumberOfPieces()
+        for i in range(n):
+            out += composite_leaves(ds.GetBlock(i) if ds.IsA("vtkMultiBlockDataSet") else ds.GetPiece(i))
+        return out
+    return [ds]
+
+
 def check_run_paraview(pvd, fails):
     from paraview import simple, servermanager
 
@@ -219,7 +232,12 @@ def check_run_paraview(pvd, fails):
         if data.GetNumberOfBlocks() != 2:
             fails.add(where, f"PVDReader output has {data.GetNumberOfBlocks()} blocks, expected 2 (part 0 bodies, part 1 contact)")
         for part in range(min(2, data.GetNumberOfBlocks())):
-            check_dataset(data.GetBlock(part), part, f"{where}, part {part}", fails, report)
+            # ParaView nests each part's pieces in a multiblock of its own: unwrap it.
+            leaves = composite_leaves(data.GetBlock(part))
+            if len(leaves) != 1:
+                fails.add(f"{where}, part {part}", f"{len(leaves)} datasets in the part, expected 1")
+                continue
+            check_dataset(leaves[0], part, f"{where}, part {part}", fails, report)
     simple.Delete(reader)
     return len(times), report
 

@@ -403,6 +403,10 @@ def parse_ccx_log(text):
     if m:
         info["ccx_total_time_reported_s"] = float(m[-1])
     # ccx 2.20 prints no per-phase timing; the .sta file gives increments and iterations
+    # size of the linear system ccx solves (the expanded plane-strain model, after its MPCs)
+    eqs = re.findall(r"number of equations\s+(\d+)", text)
+    if eqs:
+        info["equations"] = max(int(v) for v in eqs)
     info["iterations"] = len(re.findall(r"iteration\s+\d+", text))
     info["increments"] = len(re.findall(r"increment\s+\d+\s+attempt", text))
     info["cutbacks"] = len(re.findall(r"attempt\s+[2-9]", text))
@@ -476,7 +480,10 @@ def run_level(level, args):
                 last_phase = "matrix_structure"
             else:
                 last_phase = "other"
-        proc.wait()
+        # wait4 rather than wait: the child's own resource usage gives ccx's peak memory
+        # (stdbuf execs ccx, so the child is ccx itself)
+        _, wstatus, rusage = os.wait4(proc.pid, 0)
+        proc.returncode = os.waitstatus_to_exitcode(wstatus)
     wall = time.perf_counter() - t0
     phases[last_phase] = phases.get(last_phase, 0.0) + (wall - last_t)
     with open(os.path.join(wdir, job + ".log")) as fh:
@@ -492,6 +499,7 @@ def run_level(level, args):
         "master_faces": facts["master_faces"],
         "threads": args.threads,
         "wall_time_s": round(wall, 3),
+        "peak_memory_mib": round(rusage.ru_maxrss / 1024.0, 1),  # ru_maxrss is in KiB on Linux
         "ccx_returncode": proc.returncode,
         "penalty": args.penalty,
         "stick_slope": args.stick_slope,

@@ -1,0 +1,135 @@
+//! Stability study: contact method × friction-law shape × load-step count × mesh size relative
+//! to the transition length s0, on the paper's Fig. 2 problem (f_s = 0.15, f_d = 0.1, Λ = 0.05,
+//! Q ramped to 0.8 f_d P under force control), plus the force-controlled jump past the peak.
+//!
+//! For every combination: whether it converged, Newton iterations per step, cutbacks, and the
+//! error of the stick semi-width against the double Cattaneo–Mindlin c (the same for every
+//! shape: they share W = (f_s − f_d)Δ).
+//!
+//! Run: `cargo bench --bench stability` — prints a markdown table and writes
+//! `out/bench/stability.csv`; `python3 post/stability_chart.py out/bench/stability.csv OUT.png`
+//! draws the chart.
+
+use serde_json::{Value, json};
+use std::path::PathBuf;
+use std::process::Command;
+
+fn main() {
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let tmp =
+        std::env::temp_dir().join(format!("stickslip-bench-stability-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let threads = std::env::var("STICKSLIP_THREADS").unwrap_or_else(|_| "2".into());
+    // Double C–M c/a for Q = 0.8 f_d P, Λ = 0.05 (stickslip analytic dcm).
+    let dcm: Value = serde_json::from_slice(
+        &Command::new(env!("CARGO_BIN_EXE_stickslip"))
+            .args([
+                "analytic",
+                "dcm",
+                "--fs",
+                "0.15",
+                "--fd",
+                "0.1",
+                "--lambda",
+                "0.05",
+                "--q-ratio",
+                "0.8",
+            ])
+            .output()
+            .unwrap()
+            .stdout,
+    )
+    .unwrap();
+    let c_ref = dcm["c"].as_f64().unwrap();
+    let a = 0.680_778;
+    let s0 = 2.0 * 0.05 * a / std::f64::consts::PI;
+    let mut rows = vec![
+        "method,shape,steps,level,h_over_s0,converged,iterations_per_step,cutbacks,c_error,status"
+            .to_string(),
+    ];
+    println!(
+        "| method | shape | steps | mesh | h/s0 | converged | Newton its/step | cutbacks | c error vs double C–M |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for method in ["newton", "penalty", "augmented_lagrangian"] {
+        for shape in ["step", "ramp", "exponential"] {
+            for steps in [5, 20, 80] {
+                for level in [2, 3, 4] {
+                    let h = a / (3.2 * 2f64.powi(level));
+                    let mut v: Value = serde_json::from_str(
+                        &std::fs::read_to_string(repo.join("cases/fig2.json")).unwrap(),
+                    )
+                    .unwrap();
+                    v["mesh"] = json!(
+                        repo.join(format!("meshes/vm272_L{level}.msh"))
+                            .to_str()
+                            .unwrap()
+                    );
+                    v["output"] = json!({"vtu": false});
+                    v["contact"]["method"] = json!(method);
+                    v["contact"]["friction"]["shape"] = json!(shape);
+                    v["stages"][1]["steps"] = json!(steps);
+                    let name = format!("{method}_{shape}_{steps}_L{level}");
+                    let path = tmp.join(format!("{name}.json"));
+                    std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
+                    let out = tmp.join(&name);
+                    let st = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+                        .args([
+                            "run",
+                            path.to_str().unwrap(),
+                            "--out",
+                            out.to_str().unwrap(),
+                            "--quiet",
+                            "--threads",
+                            &threads,
+                        ])
+                        .status()
+                        .unwrap();
+                    let s: Value = serde_json::from_str(
+                        &std::fs::read_to_string(out.join("summary.json")).unwrap_or("{}".into()),
+                    )
+                    .unwrap_or(json!({}));
+                    let steps_done = s["steps"].as_array().map_or(0, |v| v.len());
+                    let its = s["newton_iterations"].as_f64().unwrap_or(0.0);
+                    let cut: f64 = s["steps"].as_array().map_or(0.0, |v| {
+                        v.iter()
+                            .map(|r| r["cutbacks"].as_f64().unwrap_or(0.0))
+                            .fold(0.0, f64::max)
+                    });
+                    let c = s["steps"]
+                        .as_array()
+                        .and_then(|v| v.last())
+                        .and_then(|r| r["contact"]["c"].as_f64())
+                        .unwrap_or(f64::NAN);
+                    let ok = st.success();
+                    let err = if ok { c / c_ref - 1.0 } else { f64::NAN };
+                    let status = s["status"]
+                        .as_str()
+                        .unwrap_or("no summary")
+                        .replace(',', ";");
+                    println!(
+                        "| {method} | {shape} | {steps} | L{level} | {:.2} | {} | {:.1} | {} | {} |",
+                        h / s0,
+                        if ok { "yes" } else { "**no**" },
+                        its / steps_done.max(1) as f64,
+                        cut,
+                        if ok {
+                            format!("{:+.2} %", 100.0 * err)
+                        } else {
+                            status.clone()
+                        }
+                    );
+                    rows.push(format!("{method},{shape},{steps},{level},{:.4},{ok},{:.3},{cut},{err:.6},\"{status}\"", h / s0, its / steps_done.max(1) as f64));
+                }
+            }
+        }
+    }
+    let dir = repo.join("out/bench");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("stability.csv"), rows.join("\n") + "\n").unwrap();
+    println!(
+        "\n(double C–M c/a = {:.4}; s0 = 2Λa/π = {s0:.4} mm; table in out/bench/stability.csv)",
+        c_ref / a
+    );
+    let _ = std::fs::remove_dir_all(&tmp);
+}
