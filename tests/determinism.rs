@@ -1,0 +1,155 @@
+//! The same case run on one thread and on two gives bit-identical results: every
+//! `contact_NNNN.csv` and every `.vtu` file (bodies and contact surface) must be byte for byte
+//! the same. Case: `cases/vm272_cm.json` (normal load, then Cattaneo–Mindlin tangential
+//! loading, 11 steps) on the mesh `vm272_L2`.
+//!
+//! On a difference the test names the file, and for a CSV the column, the row and the largest
+//! absolute and relative difference; for a `.vtu` the data array holding the first differing
+//! byte.
+
+mod common;
+use common::*;
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn run(dir: &Path, case: &Path, threads: usize) -> PathBuf {
+    let out = dir.join(format!("out{threads}"));
+    let o = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args([
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--threads",
+            &threads.to_string(),
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "--threads {threads}: exit {:?}: {}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    out
+}
+
+/// Files compared: the contact CSVs and every `.vtu`, sorted by name.
+fn compared_files(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .filter(|n| (n.starts_with("contact_") && n.ends_with(".csv")) || n.ends_with(".vtu"))
+        .collect();
+    v.sort();
+    v
+}
+
+/// For two CSV tables: (column, row, |a − b|, relative) of the largest difference per column.
+fn csv_diff(a: &str, b: &str) -> Vec<String> {
+    let head: Vec<&str> = a.lines().next().unwrap_or("").split(',').collect();
+    let rows = |s: &str| -> Vec<Vec<f64>> {
+        s.lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|x| x.parse().unwrap_or(f64::NAN)).collect())
+            .collect()
+    };
+    let (ra, rb) = (rows(a), rows(b));
+    if ra.len() != rb.len() {
+        return vec![format!("{} rows against {}", ra.len(), rb.len())];
+    }
+    let mut out = Vec::new();
+    for (c, name) in head.iter().enumerate() {
+        let mut worst = (0usize, 0.0f64, 0.0f64);
+        let scale = ra.iter().map(|r| r[c].abs()).fold(0.0, f64::max);
+        for (i, (x, y)) in ra.iter().zip(&rb).enumerate() {
+            let d = (x[c] - y[c]).abs();
+            if d > worst.1 || (x[c].to_bits() != y[c].to_bits() && worst.1 == 0.0) {
+                worst = (i, d, d / scale.max(1e-300));
+            }
+        }
+        if ra.iter().zip(&rb).any(|(x, y)| x[c].to_bits() != y[c].to_bits()) {
+            out.push(format!(
+                "column `{name}`: largest difference {:.3e} ({:.3e} of the column's largest value) at row {}",
+                worst.1, worst.2, worst.0 + 1
+            ));
+        }
+    }
+    out
+}
+
+/// The `Name` of the XML data array that contains byte `pos` of a `.vtu`.
+fn vtu_array_at(text: &[u8], pos: usize) -> String {
+    let before = String::from_utf8_lossy(&text[..pos]);
+    match before.rfind("<DataArray") {
+        Some(i) => {
+            let tag = &before[i..];
+            let tag = &tag[..tag.find('>').unwrap_or(tag.len())];
+            match tag.find("Name=\"") {
+                Some(j) => tag[j + 6..].split('"').next().unwrap_or("").to_string(),
+                None => "(points)".into(),
+            }
+        }
+        None => "(header)".into(),
+    }
+}
+
+#[test]
+fn one_and_two_threads_give_identical_files() {
+    let dir = tempdir("determinism");
+    let mut v: Value = serde_json::from_str(
+        &std::fs::read_to_string(repo().join("cases/vm272_cm.json")).unwrap(),
+    )
+    .unwrap();
+    v["mesh"] = json!(repo().join("meshes/vm272_L2.msh").to_str().unwrap());
+    let case = dir.join("vm272_cm.json");
+    std::fs::write(&case, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+
+    let o1 = run(&dir, &case, 1);
+    let o2 = run(&dir, &case, 2);
+    let (f1, f2) = (compared_files(&o1), compared_files(&o2));
+    assert_eq!(f1, f2, "the two runs wrote different sets of files");
+    assert!(
+        f1.iter().filter(|n| n.ends_with(".csv")).count() == 11
+            && f1.iter().filter(|n| n.ends_with(".vtu")).count() == 22,
+        "expected 11 contact CSVs and 22 .vtu files, got {f1:?}"
+    );
+    let mut diffs = Vec::new();
+    for name in &f1 {
+        let a = std::fs::read(o1.join(name)).unwrap();
+        let b = std::fs::read(o2.join(name)).unwrap();
+        if a == b {
+            continue;
+        }
+        if name.ends_with(".csv") {
+            let d = csv_diff(&String::from_utf8_lossy(&a), &String::from_utf8_lossy(&b));
+            diffs.push(format!("{name}: {}", d.join("; ")));
+        } else {
+            let pos = a
+                .iter()
+                .zip(&b)
+                .position(|(x, y)| x != y)
+                .unwrap_or(a.len().min(b.len()));
+            diffs.push(format!(
+                "{name}: first difference at byte {pos}, in data array `{}` (sizes {} and {})",
+                vtu_array_at(&a, pos),
+                a.len(),
+                b.len()
+            ));
+        }
+    }
+    println!(
+        "compared {} files between --threads 1 and --threads 2: {} differ",
+        f1.len(),
+        diffs.len()
+    );
+    assert!(
+        diffs.is_empty(),
+        "--threads 1 and --threads 2 differ (outputs kept in {}):\n{}",
+        dir.display(),
+        diffs.join("\n")
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
