@@ -164,6 +164,9 @@ pub struct Summary {
     /// Time in the contact iterations (part of `timings_s.solve`).
     pub contact_solve_s: f64,
     pub newton_iterations: usize,
+    /// Dense factorisations and GMRES iterations of the contact Newton solves.
+    pub lu_factorisations: usize,
+    pub gmres_iterations: usize,
     pub peak_memory_mib: Option<f64>,
     pub friction: Option<FrictionSummary>,
     pub steps: Vec<StepRecord>,
@@ -217,6 +220,7 @@ impl Model {
         guess: Option<&State>,
         opt: &solver::Options,
         law: Option<&crate::friction::FrictionLaw>,
+        cache: Option<&mut solver::LuCache>,
     ) -> Result<solver::StepOutcome, ContactError> {
         let cm = self.contact.as_ref().expect("contact model");
         let w0: Vec<f64> = self.contact_w0[0]
@@ -228,7 +232,8 @@ impl Model {
             Control::Force(f) => PilotDrive::Force(f),
             Control::Displacement(d) => PilotDrive::Displacement(d),
         });
-        cm.system.solve_step(&w0, drive, law, prev, guess, opt)
+        cm.system
+            .solve_step(&w0, drive, law, prev, guess, opt, cache)
     }
 
     /// The displacement of all free DOFs for a contact state at traction scale `scale`: one
@@ -466,6 +471,9 @@ pub struct Simulation {
     /// load passed the peak.
     pub lost_equilibrium: Option<(f64, f64)>,
     pub newton_iterations: usize,
+    /// Dense factorisations and GMRES iterations of the contact Newton solves.
+    pub lu_factorisations: usize,
+    pub gmres_iterations: usize,
     pub solve_s: f64,
     pub contact_solve_s: f64,
 }
@@ -489,6 +497,7 @@ pub fn simulate(
         tolerance: c.tolerance.unwrap_or(1e-8),
     });
     let mut cstate = model.contact.as_ref().map(|c| c.system.initial_state());
+    let mut lu_cache = solver::LuCache::default();
     let mut control = [Control::Force(0.0); 2];
     let mut pilot = PilotState::default();
     let mut scale = 0.0;
@@ -551,8 +560,15 @@ pub fn simulate(
                         g.z = ext(&prev.z, &old.z);
                         g
                     });
-                let res =
-                    model.solve_contact_step(sc, ctl, prev, guess.as_ref(), opt, law.as_ref());
+                let res = model.solve_contact_step(
+                    sc,
+                    ctl,
+                    prev,
+                    guess.as_ref(),
+                    opt,
+                    law.as_ref(),
+                    Some(&mut lu_cache),
+                );
                 t_contact += tc.elapsed().as_secs_f64();
                 match res {
                     Ok(out) => {
@@ -688,6 +704,8 @@ pub fn simulate(
         failure,
         lost_equilibrium,
         newton_iterations: newton_total,
+        lu_factorisations: lu_cache.factorisations,
+        gmres_iterations: lu_cache.gmres_iterations,
         solve_s: t_solve,
         contact_solve_s: t_contact,
     })
@@ -769,6 +787,8 @@ pub fn run_model(
         failure,
         lost_equilibrium,
         newton_iterations: newton_total,
+        lu_factorisations,
+        gmres_iterations,
         solve_s: t_solve,
         contact_solve_s: t_contact,
     } = sim;
@@ -849,6 +869,8 @@ pub fn run_model(
         timings_s: model.timings.clone(),
         contact_solve_s: t_contact,
         newton_iterations: newton_total,
+        lu_factorisations,
+        gmres_iterations,
         peak_memory_mib: output::peak_memory_bytes().map(|b| b as f64 / (1024.0 * 1024.0)),
         friction: friction_summary(
             &model,

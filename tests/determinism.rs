@@ -53,7 +53,11 @@ fn csv_diff(a: &str, b: &str) -> Vec<String> {
     let rows = |s: &str| -> Vec<Vec<f64>> {
         s.lines()
             .skip(1)
-            .map(|l| l.split(',').map(|x| x.parse().unwrap_or(f64::NAN)).collect())
+            .map(|l| {
+                l.split(',')
+                    .map(|x| x.parse().unwrap_or(f64::NAN))
+                    .collect()
+            })
             .collect()
     };
     let (ra, rb) = (rows(a), rows(b));
@@ -70,7 +74,11 @@ fn csv_diff(a: &str, b: &str) -> Vec<String> {
                 worst = (i, d, d / scale.max(1e-300));
             }
         }
-        if ra.iter().zip(&rb).any(|(x, y)| x[c].to_bits() != y[c].to_bits()) {
+        if ra
+            .iter()
+            .zip(&rb)
+            .any(|(x, y)| x[c].to_bits() != y[c].to_bits())
+        {
             out.push(format!(
                 "column `{name}`: largest difference {:.3e} ({:.3e} of the column's largest value) at row {}",
                 worst.1, worst.2, worst.0 + 1
@@ -99,16 +107,25 @@ fn vtu_array_at(text: &[u8], pos: usize) -> String {
 #[test]
 fn one_and_two_threads_give_identical_files() {
     let dir = tempdir("determinism");
-    let mut v: Value = serde_json::from_str(
-        &std::fs::read_to_string(repo().join("cases/vm272_cm.json")).unwrap(),
-    )
-    .unwrap();
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(repo().join("cases/vm272_cm.json")).unwrap())
+            .unwrap();
     v["mesh"] = json!(repo().join("meshes/vm272_L2.msh").to_str().unwrap());
     let case = dir.join("vm272_cm.json");
     std::fs::write(&case, serde_json::to_string_pretty(&v).unwrap()).unwrap();
 
     let o1 = run(&dir, &case, 1);
     let o2 = run(&dir, &case, 2);
+    for (o, n) in [(&o1, 1), (&o2, 2)] {
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(o.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(
+            s["threads"],
+            json!(n),
+            "summary.json of the --threads {n} run"
+        );
+    }
     let (f1, f2) = (compared_files(&o1), compared_files(&o2));
     assert_eq!(f1, f2, "the two runs wrote different sets of files");
     assert!(
@@ -140,8 +157,31 @@ fn one_and_two_threads_give_identical_files() {
             ));
         }
     }
+    // history.csv too, without its wall-clock column.
+    let history = |o: &Path| -> Vec<String> {
+        let t = std::fs::read_to_string(o.join("history.csv")).unwrap();
+        let head: Vec<&str> = t.lines().next().unwrap().split(',').collect();
+        let wall = head.iter().position(|c| *c == "wall_s");
+        t.lines()
+            .map(|l| {
+                l.split(',')
+                    .enumerate()
+                    .filter(|(i, _)| Some(*i) != wall)
+                    .map(|(_, x)| x)
+                    .collect::<Vec<_>>()
+                    .join(",")
+            })
+            .collect()
+    };
+    let (h1, h2) = (history(&o1), history(&o2));
+    if h1 != h2 {
+        diffs.push(format!(
+            "history.csv (without wall_s): {}",
+            csv_diff(&h1.join("\n"), &h2.join("\n")).join("; ")
+        ));
+    }
     println!(
-        "compared {} files between --threads 1 and --threads 2: {} differ",
+        "compared {} files and history.csv between --threads 1 and --threads 2: {} differ",
         f1.len(),
         diffs.len()
     );

@@ -314,6 +314,7 @@ fn newton_jacobian_matches_finite_differences() {
                     None,
                     &opt,
                     Some(&law),
+                    None,
                 )
                 .unwrap()
                 .state;
@@ -328,6 +329,7 @@ fn newton_jacobian_matches_finite_differences() {
                 None,
                 &opt,
                 Some(&law),
+                None,
             )
             .unwrap()
             .state;
@@ -358,6 +360,7 @@ fn newton_jacobian_matches_finite_differences() {
                 stickslip::contact::solver::PilotDrive::Force(-10.0),
             ],
             law: Some(&law),
+            substitute: true,
             prev: &st,
             mu: &mu,
             status: &next.status,

@@ -51,6 +51,7 @@ fn solve_model(model: &Model, load: f64, method: Method, kappa: f64) -> Solution
             None,
             &opt,
             None,
+            None,
         )
         .unwrap();
     let fig = model.contact_figures(&out.state, None);

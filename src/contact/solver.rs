@@ -95,6 +95,8 @@ pub struct State {
 /// One iteration's data for [`ContactSystem::newton_system`].
 #[derive(Clone, Copy)]
 pub struct Iterate<'a> {
+    /// Substitute the tangential force of slip nodes with μ′ = 0 (`F_t = ±μ F_n`).
+    pub substitute: bool,
     pub w0: &'a [f64],
     pub drive: [PilotDrive; 2],
     pub law: Option<&'a FrictionLaw>,
@@ -223,6 +225,13 @@ impl ContactSystem {
     ///
     /// `guess`: predicted forces for this step (e.g. extrapolated from the last two steps); the
     /// first active sets are taken from it instead of from the committed state.
+    ///
+    /// `cache`: a factorisation kept from earlier iterations and steps. While the unknowns stay
+    /// the same (through a tangential ramp only stick/slip rows change), each Newton system is
+    /// solved by GMRES preconditioned with the cached LU — a few matrix–vector products instead
+    /// of a new factorisation — and refactorised when GMRES needs more than a handful of
+    /// iterations. Tangential forces of slip nodes are then kept as unknowns (not substituted)
+    /// so that the unknowns do not change with every stick/slip change.
     #[allow(clippy::too_many_arguments)]
     pub fn solve_step(
         &self,
@@ -232,6 +241,7 @@ impl ContactSystem {
         prev: &State,
         guess: Option<&State>,
         opt: &Options,
+        mut cache: Option<&mut LuCache>,
     ) -> Result<StepOutcome, ContactError> {
         let ns = self.ns;
         let m = self.m();
@@ -338,6 +348,7 @@ impl ContactSystem {
             }
             solved = true;
             let it_ctx = Iterate {
+                substitute: cache.is_none(),
                 w0,
                 drive,
                 law,
@@ -358,28 +369,28 @@ impl ContactSystem {
                 slip_lin,
             } = self.newton_system(&it_ctx);
             let nu = unk.len();
-            let lu = a.partial_piv_lu();
-            let x = lu.solve(&b);
-            // A singular system (a body free to slide once every node slips, or a direction
-            // nothing holds) still gives a finite answer from a backward-stable LU: judge it by
-            // the smallest pivot against the largest.
-            let mut bad = (0..nu).any(|i| !x[(i, 0)].is_finite());
-            if !bad && nu > 0 {
-                let u = lu.U();
-                let d: Vec<f64> = (0..nu).map(|i| u[(i, i)].abs()).collect();
-                let (lo, hi) = (
-                    d.iter().cloned().fold(f64::INFINITY, f64::min),
-                    d.iter().cloned().fold(0.0, f64::max),
-                );
-                bad = lo <= 1e-12 * hi;
-            }
+            let x = match cache.as_deref_mut() {
+                Some(c) => c.solve(&unk, &a, &b),
+                None => {
+                    let lu = a.partial_piv_lu();
+                    let x = lu.solve(&b);
+                    if singular_pivots(&lu) { None } else { Some(x) }
+                }
+            };
+            let bad = x
+                .as_ref()
+                .is_none_or(|x| (0..nu).any(|i| !x[(i, 0)].is_finite()));
             if bad {
+                if let Some(c) = cache.as_deref_mut() {
+                    c.clear();
+                }
                 return Err(ContactError::Singular(format!(
                     "{} unknowns, {} in contact; a body may be free to move in a direction no contact or support holds",
                     nu,
                     status.iter().filter(|s| **s != Status::Open).count()
                 )));
             }
+            let x = x.expect("checked above");
             let mut new_mu = vec![0.0; m];
             for (q, &u) in unk.iter().enumerate() {
                 new_mu[u] = x[(q, 0)];
@@ -418,6 +429,7 @@ impl ContactSystem {
             eps,
             fbar_n,
             fbar_t,
+            ..
         } = *it;
         let ns = self.ns;
         let m = self.m();
@@ -664,4 +676,137 @@ impl ContactSystem {
             last_update,
         }
     }
+}
+
+/// Whether an LU factorisation is numerically singular: its smallest pivot against the largest.
+/// A singular system (a body free to slide once every node slips, or a direction nothing holds)
+/// still gives a finite answer from a backward-stable LU.
+fn singular_pivots(lu: &faer::linalg::solvers::PartialPivLu<f64>) -> bool {
+    let u = lu.U();
+    let n = u.nrows();
+    if n == 0 {
+        return false;
+    }
+    let d: Vec<f64> = (0..n).map(|i| u[(i, i)].abs()).collect();
+    let lo = d.iter().cloned().fold(f64::INFINITY, f64::min);
+    let hi = d.iter().cloned().fold(0.0, f64::max);
+    lo <= 1e-12 * hi
+}
+
+/// A dense LU kept across Newton iterations and load steps (see [`ContactSystem::solve_step`]).
+#[derive(Default)]
+pub struct LuCache {
+    unk: Vec<usize>,
+    lu: Option<faer::linalg::solvers::PartialPivLu<f64>>,
+    /// Factorisations done and GMRES iterations spent (for the run summary).
+    pub factorisations: usize,
+    pub gmres_iterations: usize,
+}
+
+/// GMRES iterations before giving up on the cached factorisation and refactorising.
+const GMRES_MAX: usize = 12;
+
+impl LuCache {
+    /// Forgets the factorisation.
+    pub fn clear(&mut self) {
+        self.lu = None;
+        self.unk.clear();
+    }
+
+    /// Solves `A x = b` for the unknowns `unk`: by GMRES preconditioned with the cached LU when
+    /// it is for the same unknowns, else (or if GMRES stalls) with a new LU, which is kept.
+    /// `None` when the system is singular.
+    fn solve(&mut self, unk: &[usize], a: &Mat<f64>, b: &Mat<f64>) -> Option<Mat<f64>> {
+        if self.unk == unk {
+            if let Some(lu) = &self.lu {
+                if let Some((x, its)) = gmres(a, b, lu, 1e-13, GMRES_MAX) {
+                    self.gmres_iterations += its;
+                    return Some(x);
+                }
+            }
+        }
+        let lu = a.partial_piv_lu();
+        self.factorisations += 1;
+        if singular_pivots(&lu) {
+            self.clear();
+            return None;
+        }
+        let x = lu.solve(b);
+        self.unk = unk.to_vec();
+        self.lu = Some(lu);
+        Some(x)
+    }
+}
+
+/// Right-preconditioned GMRES (no restart) for `A x = b` with preconditioner `M⁻¹` given by an
+/// LU of a nearby matrix, from `x0 = M⁻¹ b`. Returns the solution and the iterations, or
+/// `None` if the relative residual is not below `tol` within `max_it` iterations.
+fn gmres(
+    a: &Mat<f64>,
+    b: &Mat<f64>,
+    m: &faer::linalg::solvers::PartialPivLu<f64>,
+    tol: f64,
+    max_it: usize,
+) -> Option<(Mat<f64>, usize)> {
+    let n = a.nrows();
+    let bn = b.norm_l2();
+    if bn == 0.0 {
+        return Some((Mat::zeros(n, 1), 0));
+    }
+    let x0 = m.solve(b);
+    let r0 = b - a * &x0;
+    let beta = r0.norm_l2();
+    if beta <= tol * bn {
+        return Some((x0, 0));
+    }
+    // Arnoldi on A M⁻¹ with modified Gram–Schmidt; Givens rotations for the least squares.
+    let mut v: Vec<Mat<f64>> = vec![&r0 * faer::Scale(1.0 / beta)];
+    let mut h = vec![vec![0.0; max_it]; max_it + 1];
+    let (mut cs, mut sn) = (vec![0.0; max_it], vec![0.0; max_it]);
+    let mut g = vec![0.0; max_it + 1];
+    g[0] = beta;
+    for k in 0..max_it {
+        let z = m.solve(&v[k]);
+        let mut w = a * &z;
+        for i in 0..=k {
+            let hik = (v[i].transpose() * &w)[(0, 0)];
+            h[i][k] = hik;
+            w -= &v[i] * faer::Scale(hik);
+        }
+        let hn = w.norm_l2();
+        h[k + 1][k] = hn;
+        for i in 0..k {
+            let t = cs[i] * h[i][k] + sn[i] * h[i + 1][k];
+            h[i + 1][k] = -sn[i] * h[i][k] + cs[i] * h[i + 1][k];
+            h[i][k] = t;
+        }
+        let d = h[k][k].hypot(h[k + 1][k]);
+        if d == 0.0 {
+            return None;
+        }
+        cs[k] = h[k][k] / d;
+        sn[k] = h[k + 1][k] / d;
+        h[k][k] = d;
+        h[k + 1][k] = 0.0;
+        g[k + 1] = -sn[k] * g[k];
+        g[k] *= cs[k];
+        if g[k + 1].abs() <= tol * bn || hn == 0.0 {
+            // y = H⁻¹ g, x = x0 + M⁻¹ V y
+            let mut y = vec![0.0; k + 1];
+            for i in (0..=k).rev() {
+                let s: f64 = (i + 1..=k).map(|j| h[i][j] * y[j]).sum();
+                y[i] = (g[i] - s) / h[i][i];
+            }
+            let mut vy = Mat::<f64>::zeros(n, 1);
+            for (i, yi) in y.iter().enumerate() {
+                vy += &v[i] * faer::Scale(*yi);
+            }
+            let x = x0 + m.solve(&vy);
+            // Guard against loss of orthogonality: check the true residual.
+            let r = (b - a * &x).norm_l2();
+            return (r <= 10.0 * tol * bn).then_some((x, k + 1));
+        }
+        v.push(&w * faer::Scale(1.0 / hn));
+    }
+    None
 }

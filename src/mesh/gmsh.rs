@@ -69,6 +69,18 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
     if version != "4.1" {
         return Err(MeshReadError::OldFormat { path: p, version });
     }
+    // mshio panics on a data size other than 1, 2, 4, 8, 16 or one that overflows; gmsh writes
+    // sizeof(size_t), and the node-tag pass below reads 4 or 8.
+    if let Some(size) = header_data_size(bytes) {
+        if !matches!(size.parse::<u64>(), Ok(4 | 8)) {
+            return Err(MeshReadError::Parse {
+                path: p,
+                detail: format!(
+                    "the $MeshFormat data size is `{size}`; it must be 4 or 8 (sizeof(size_t))"
+                ),
+            });
+        }
+    }
     let names = physical_names(bytes, &p)?;
     let msh = mshio::parse_msh_bytes(bytes).map_err(|e| MeshReadError::Parse {
         path: p.clone(),
@@ -285,6 +297,19 @@ fn header_version(bytes: &[u8]) -> Option<String> {
     lines.find(|l| *l == "$MeshFormat")?;
     let v = lines.next()?.split_whitespace().next()?.to_string();
     Some(v)
+}
+
+/// The data-size field of the `$MeshFormat` line (`4.1 <file-type> <data-size>`), when it is
+/// written as digits.
+fn header_data_size(bytes: &[u8]) -> Option<String> {
+    let head = &bytes[..bytes.len().min(256)];
+    let text = String::from_utf8_lossy(head);
+    let mut lines = text.lines().map(str::trim);
+    lines.find(|l| *l == "$MeshFormat")?;
+    let size = lines.next()?.split_whitespace().nth(2)?;
+    size.bytes()
+        .all(|b| b.is_ascii_digit())
+        .then(|| size.to_string())
 }
 
 /// Parses the `$PhysicalNames` section (always ASCII, also in binary files):
