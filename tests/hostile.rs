@@ -414,6 +414,13 @@ fn degenerate_mesh_files_are_refused_without_panic() {
         ("version 4.1 with size_t 0", "$MeshFormat\n4.1 0 0\n$EndMeshFormat\n$Nodes\n1 1 1 1\n2 1 0 1\n1\n0 0 0\n$EndNodes\n".into()),
         ("NaN coordinates", format!("{head}$Nodes\n1 1 1 1\n2 1 0 1\n1\nnan nan 0\n$EndNodes\n$Elements\n0 0 0 0\n$EndElements\n").into()),
         ("version 4", "$MeshFormat\n4 0 8\n$EndMeshFormat\n".into()),
+        (
+            "triangles on a curve entity",
+            std::fs::read_to_string(repo().join("meshes/patch_curved.msh"))
+                .unwrap()
+                .replacen("\n2 1 9 26\n", "\n1 1 9 26\n", 1)
+                .into(),
+        ),
         ("version 99", "$MeshFormat\n99 0 8\n$EndMeshFormat\n".into()),
         ("only a marker", "$MeshFormat".into()),
         ("non-UTF-8", vec![0xff, 0xfe, 0x00, 0x24, 0x4d]),
@@ -1223,6 +1230,19 @@ fn cli_cases() -> Vec<CliCase> {
             files: vec![("case.json", hertz.clone()), ("mesh.msh", mesh.clone())],
             args: run(&["--threads", "0"]),
             expect: Expect::Refused(2, &["threads"]),
+        },
+        CliCase {
+            name: "triangles on a curve entity",
+            input: "`stickslip mesh-info` on patch_curved.msh with the triangle block's entity dimension 2 → 1 (panicked with exit 101 before the fix)",
+            files: vec![(
+                "mesh.msh",
+                std::fs::read_to_string(repo().join("meshes/patch_curved.msh"))
+                    .unwrap()
+                    .replacen("\n2 1 9 26\n", "\n1 1 9 26\n", 1)
+                    .into_bytes(),
+            )],
+            args: vec!["mesh-info".into(), "mesh.msh".into()],
+            expect: Expect::Refused(2, &["mesh.msh", "dimension 1"]),
         },
         CliCase {
             name: "mesh-info on a truncated mesh",

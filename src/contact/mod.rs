@@ -44,7 +44,7 @@ pub enum PairError {
         min: f64,
     },
     #[error(
-        "contact: slave `{slave}` and master `{master}` penetrate initially by {depth:e} at ({x:.6}, {y:.6}); move the bodies apart"
+        "contact: slave `{slave}` and master `{master}` penetrate initially, by up to {depth:e} at ({x:.6}, {y:.6}); move the bodies apart"
     )]
     Penetration {
         slave: String,
@@ -129,6 +129,8 @@ pub fn build_pair(
     let mut zone = Vec::new();
     let mut min_gap = f64::INFINITY;
     let mut samples: Vec<(f64, [f64; 2])> = Vec::new();
+    // The deepest initial penetration, if any (reported, not resolved).
+    let mut deepest: Option<(f64, [f64; 2])> = None;
     for (i, e) in slave.iter().enumerate() {
         let xs = e.map(|k| mesh.nodes[k]);
         let mut in_zone = false;
@@ -138,14 +140,8 @@ pub fn build_pair(
             if let Some(g) = point_gap(mesh, master, x, n, 10.0 * (candidate_gap + h)) {
                 min_gap = min_gap.min(g);
                 samples.push((g, n));
-                if g < -1e-9 * h {
-                    return Err(PairError::Penetration {
-                        slave: slave_name.into(),
-                        master: master_name.into(),
-                        depth: -g,
-                        x: x[0],
-                        y: x[1],
-                    });
+                if g < -1e-9 * h && deepest.is_none_or(|d: (f64, [f64; 2])| -g > d.0) {
+                    deepest = Some((-g, x));
                 }
                 if g <= candidate_gap {
                     in_zone = true;
@@ -155,6 +151,15 @@ pub fn build_pair(
         if in_zone {
             zone.push(i);
         }
+    }
+    if let Some((depth, x)) = deepest {
+        return Err(PairError::Penetration {
+            slave: slave_name.into(),
+            master: master_name.into(),
+            depth,
+            x: x[0],
+            y: x[1],
+        });
     }
     if zone.is_empty() {
         return Err(PairError::EmptyZone {

@@ -185,6 +185,19 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
                 hint,
             });
         }
+        // A group's element indices point into `triangles` or `lines` by its dimension, so the
+        // block's element type must match the dimension of its entity.
+        if dim != if kind == 9 { 2 } else { 1 } {
+            return Err(MeshReadError::Parse {
+                path: p,
+                detail: format!(
+                    "element block of gmsh type {kind} (first element {}) is on an entity of \
+                     dimension {dim}; 6-node triangles belong to surfaces (2), 3-node lines to \
+                     curves (1)",
+                    block.elements.first().map_or(0, |e| e.element_tag)
+                ),
+            });
+        }
         let mut local = Vec::with_capacity(block.elements.len());
         for el in &block.elements {
             let idx = |t: u64| {
