@@ -30,6 +30,10 @@ enum Cmd {
         /// Print nothing but errors.
         #[arg(long)]
         quiet: bool,
+        /// How much to print: error, warn, info (progress and end summary), debug (every
+        /// Newton iteration).
+        #[arg(long, value_enum, default_value = "info")]
+        log: stickslip::run::LogLevel,
     },
     /// Run one case against many friction laws on one shared model, in parallel, and write one
     /// table (CSV and JSON).
@@ -79,6 +83,7 @@ fn main() -> ExitCode {
             out,
             threads,
             quiet,
+            log,
         } => {
             if threads == Some(0) {
                 eprintln!("error: --threads must be at least 1");
@@ -88,7 +93,7 @@ fn main() -> ExitCode {
                 eprintln!("error: {e}");
                 return ExitCode::from(2);
             }
-            let opts = stickslip::run::RunOptions { out, quiet };
+            let opts = stickslip::run::RunOptions { out, quiet, log };
             match stickslip::run::run(&case, &opts) {
                 Ok(_) => ExitCode::SUCCESS,
                 Err(e) => {

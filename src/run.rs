@@ -67,7 +67,31 @@ impl RunError {
 pub struct RunOptions {
     /// Output directory (overrides the case's).
     pub out: Option<PathBuf>,
+    /// Print nothing but errors (same as `log = Error`).
     pub quiet: bool,
+    /// How much to print: errors; warnings; progress and the end summary (default); every
+    /// Newton iteration.
+    pub log: LogLevel,
+}
+
+/// How much a run prints to standard error.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, clap::ValueEnum)]
+pub enum LogLevel {
+    Error,
+    Warn,
+    #[default]
+    Info,
+    Debug,
+}
+
+impl RunOptions {
+    fn level(&self) -> LogLevel {
+        if self.quiet {
+            LogLevel::Error
+        } else {
+            self.log
+        }
+    }
 }
 
 /// The state of the pilot after a step.
@@ -460,6 +484,8 @@ pub struct StepEvent<'a> {
     pub u: Option<&'a Vec<f64>>,
     /// The contact state (runs with contact; the full field is recovered on demand).
     pub contact: Option<&'a State>,
+    /// The record of this step.
+    pub record: &'a StepRecord,
 }
 
 /// What [`simulate`] returns.
@@ -691,6 +717,7 @@ pub fn simulate(
                 last,
                 u: u.as_ref(),
                 contact: cstate.as_ref(),
+                record: records.last().expect("pushed above"),
             })?;
             // The cutback count is per step: the next step starts afresh.
             cutbacks = 0;
@@ -730,12 +757,46 @@ pub fn run_model(
     let mut pvd = Vec::new();
     let mut t_write = 0.0;
     let law = model.friction.clone();
+    let level = opts.level();
+    let total = case.total_steps();
+    let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let bar = (level >= LogLevel::Info && tty).then(|| {
+        let b = indicatif::ProgressBar::new(total as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} steps {elapsed} {msg}")
+                .expect("valid template"),
+        );
+        b
+    });
     let sim = simulate(
         &model,
         case,
         law.as_ref(),
-        opts.quiet,
+        level < LogLevel::Warn,
         &mut |ev: &StepEvent| {
+            let step = ev.step;
+            let r = ev.record;
+            let msg = match (r.pilot, r.contact) {
+                (Some(p), Some(c)) => format!(
+                    "Q = {:.5}, P = {:.5}, a = {:.5}, c = {:.5}, {} its",
+                    p.fx, -p.fy, c.a, c.c, r.iterations
+                ),
+                (Some(p), None) => format!(
+                    "pilot u = ({:.4e}, {:.4e}), F = ({:.5}, {:.5})",
+                    p.ux, p.uy, p.fx, p.fy
+                ),
+                _ => format!("traction scale {:.4}", r.traction_scale),
+            };
+            match &bar {
+                Some(b) => {
+                    b.set_position(step as u64);
+                    b.set_message(msg);
+                }
+                None if level >= LogLevel::Info => {
+                    eprintln!("step {step}/{total} (stage {}): {msg}", r.stage)
+                }
+                None => {}
+            }
             let step = ev.step;
             if !(case.output.vtu && (step % case.output.every == 0 || ev.last)) {
                 return Ok(());
@@ -792,7 +853,9 @@ pub fn run_model(
         solve_s: t_solve,
         contact_solve_s: t_contact,
     } = sim;
-    let step = records.len();
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
     const MAX_CUTBACKS: usize = 12;
     model.timings.solve = t_solve;
     model.timings.write = t_write;
@@ -899,13 +962,16 @@ pub fn run_model(
             .as_bytes(),
     )?;
     if let Some(fr) = &summary.friction {
-        if fr.resolved == Some(false) && !opts.quiet {
+        if fr.resolved == Some(false) && level >= LogLevel::Warn {
             eprintln!(
                 "warning: the contact elements (h = {:.3e}) are larger than s0/2 = {:.3e}: the slip-weakening transition zone is not resolved; use a finer mesh along the faces",
                 fr.h_contact,
                 fr.s0_over_a.unwrap_or(0.0) * fr.a_hertz / 2.0
             );
         }
+    }
+    if level >= LogLevel::Info {
+        eprint!("{}", end_summary(case_path, &summary, out_dir, &stem));
     }
     if let Some((q_max, q_fail)) = lost_equilibrium {
         return Err(RunError::EquilibriumLost {
@@ -917,30 +983,86 @@ pub fn run_model(
     if let Some(m) = failure {
         return Err(RunError::Solve(m));
     }
-    if !opts.quiet {
-        let t = &summary.timings_s;
-        eprintln!(
-            "{}: {} steps, {} nodes, {} triangles, {} DOFs ({} retained); assemble {:.3} s, factorise {:.3} s, condense {:.3} s, solve {:.3} s; output in {}",
-            case_path.display(),
-            step,
-            summary.nodes,
-            summary.triangles,
-            summary.dofs_free,
-            summary.dofs_retained,
-            t.assemble,
-            t.analyse + t.factorise,
-            t.condense,
-            t.solve,
-            out_dir.display()
-        );
-        if let Some(c) = summary.steps.last().and_then(|s| s.contact) {
-            eprintln!(
-                "contact: semi-width a = {:.6}, stick semi-width c = {:.6}, {} nodes in contact, force ({:.6}, {:.6}), {} Newton iterations in all",
-                c.a, c.c, c.n_contact, c.fx, c.fy, summary.newton_iterations
-            );
-        }
-    }
     Ok(summary)
+}
+
+/// The one-screen summary printed at the end of a run.
+pub fn end_summary(case_path: &Path, s: &Summary, out_dir: &Path, stem: &str) -> String {
+    let mut o = String::new();
+    let t = &s.timings_s;
+    o += &format!(
+        "stickslip: {} — {} ({} steps)\n",
+        case_path.display(),
+        s.status,
+        s.steps.len()
+    );
+    o += &format!(
+        "  mesh      {}: {} triangles, {} nodes, {} DOFs ({} retained)\n",
+        s.mesh, s.triangles, s.nodes, s.dofs_free, s.dofs_retained
+    );
+    if let Some(c) = s.steps.last().and_then(|r| r.contact) {
+        o += &format!(
+            "  contact   a = {:.5}, c = {:.5}, b = {:.5}; {} nodes in contact ({} stick, {} slip); force ({:.5}, {:.5})\n",
+            c.a, c.c, c.b, c.n_contact, c.n_stick, c.n_slip, c.fx, c.fy
+        );
+    }
+    if let Some(f) = &s.friction {
+        let opt = |v: Option<f64>| v.map_or("–".to_string(), |x| format!("{x:.4}"));
+        o += &format!(
+            "  friction  f_s = {}, f_d = {}, Δ = {}: Λ = {}, χ = {}, Ψ = {}, s0/a = {}{}\n",
+            f.f_s,
+            opt(f.f_d),
+            f.delta.map_or("–".into(), |d| format!("{d:.3e}")),
+            opt(f.lambda),
+            opt(f.chi),
+            opt(f.psi),
+            opt(f.s0_over_a),
+            match f.resolved {
+                Some(true) => " (resolved)",
+                Some(false) => " (NOT resolved by the mesh)",
+                None => "",
+            }
+        );
+        let peaked = s.status.starts_with("equilibrium lost")
+            || s.steps
+                .last()
+                .and_then(|r| r.pilot)
+                .is_some_and(|p| p.fx.abs() < f.q_max - 1e-9 * f.q_max.max(1.0));
+        o += &format!(
+            "  Q_max/P   {} (JKR {}, double C–M {}){}\n",
+            format_args!("{:.5}", f.apparent_friction),
+            opt(f.apparent_friction_jkr),
+            opt(f.apparent_friction_dcm),
+            if peaked {
+                ": the peak was reached"
+            } else {
+                ": largest load applied; the peak was not reached"
+            }
+        );
+    }
+    if s.newton_iterations > 0 {
+        o += &format!(
+            "  Newton    {} iterations, {} factorisations, {} GMRES iterations, {:.3} s\n",
+            s.newton_iterations, s.lu_factorisations, s.gmres_iterations, s.contact_solve_s
+        );
+    }
+    o += &format!(
+        "  time      read {:.3}, assemble {:.3}, analyse {:.3}, factorise {:.3}, condense {:.3}, solve {:.3}, write {:.3} s; peak memory {}\n",
+        t.read,
+        t.assemble,
+        t.analyse,
+        t.factorise,
+        t.condense,
+        t.solve,
+        t.write,
+        s.peak_memory_mib
+            .map_or("unknown".into(), |m| format!("{m:.0} MiB"))
+    );
+    o += &format!(
+        "  output    {} ({stem}.pvd, history.csv, summary.json)\n",
+        out_dir.display()
+    );
+    o
 }
 
 /// The friction summary of a run: the law's Δ and W/p and the paper's scales Λ, χ, Ψ, s0 for
