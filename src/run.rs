@@ -511,9 +511,10 @@ pub fn simulate(
     model: &Model,
     case: &Case,
     law: Option<&crate::friction::FrictionLaw>,
-    quiet: bool,
+    log: LogLevel,
     on_step: &mut dyn FnMut(&StepEvent) -> Result<(), RunError>,
 ) -> Result<Simulation, RunError> {
+    let quiet = log < LogLevel::Warn;
     let has_pilot = model.dofs.pilot.is_some();
     let law = law.cloned();
     let copt = case.contact.as_ref().map(|c| solver::Options {
@@ -521,6 +522,7 @@ pub fn simulate(
         kappa: c.penalty.unwrap_or(100.0),
         max_iterations: c.max_iterations.unwrap_or(60),
         tolerance: c.tolerance.unwrap_or(1e-8),
+        verbose: log >= LogLevel::Debug,
     });
     let mut cstate = model.contact.as_ref().map(|c| c.system.initial_state());
     let mut lu_cache = solver::LuCache::default();
@@ -768,81 +770,75 @@ pub fn run_model(
         );
         b
     });
-    let sim = simulate(
-        &model,
-        case,
-        law.as_ref(),
-        level < LogLevel::Warn,
-        &mut |ev: &StepEvent| {
-            let step = ev.step;
-            let r = ev.record;
-            let msg = match (r.pilot, r.contact) {
-                (Some(p), Some(c)) => format!(
-                    "Q = {:.5}, P = {:.5}, a = {:.5}, c = {:.5}, {} its",
-                    p.fx, -p.fy, c.a, c.c, r.iterations
-                ),
-                (Some(p), None) => format!(
-                    "pilot u = ({:.4e}, {:.4e}), F = ({:.5}, {:.5})",
-                    p.ux, p.uy, p.fx, p.fy
-                ),
-                _ => format!("traction scale {:.4}", r.traction_scale),
-            };
-            match &bar {
-                Some(b) => {
-                    b.set_position(step as u64);
-                    b.set_message(msg);
-                }
-                None if level >= LogLevel::Info => {
-                    eprintln!("step {step}/{total} (stage {}): {msg}", r.stage)
-                }
-                None => {}
+    let sim = simulate(&model, case, law.as_ref(), level, &mut |ev: &StepEvent| {
+        let step = ev.step;
+        let r = ev.record;
+        let msg = match (r.pilot, r.contact) {
+            (Some(p), Some(c)) => format!(
+                "Q = {:.5}, P = {:.5}, a = {:.5}, c = {:.5}, {} its",
+                p.fx, -p.fy, c.a, c.c, r.iterations
+            ),
+            (Some(p), None) => format!(
+                "pilot u = ({:.4e}, {:.4e}), F = ({:.5}, {:.5})",
+                p.ux, p.uy, p.fx, p.fy
+            ),
+            _ => format!("traction scale {:.4}", r.traction_scale),
+        };
+        match &bar {
+            Some(b) => {
+                b.set_position(step as u64);
+                b.set_message(msg);
             }
-            let step = ev.step;
-            if !(case.output.vtu && (step % case.output.every == 0 || ev.last)) {
-                return Ok(());
+            None if level >= LogLevel::Info => {
+                eprintln!("step {step}/{total} (stage {}): {msg}", r.stage)
             }
-            let t = Instant::now();
-            let name = format!("{stem}_{step:04}.vtu");
-            let u = match (ev.u, ev.contact) {
-                (Some(u), _) => u.clone(),
-                (None, Some(st)) => model.contact_displacement(ev.scale, st),
-                (None, None) => unreachable!("a step has a solution or a contact state"),
-            };
-            let bytes = bodies_vtu(&model, &u, case).map_err(|e| RunError::Write {
-                path: name.clone(),
+            None => {}
+        }
+        let step = ev.step;
+        if !(case.output.vtu && (step % case.output.every == 0 || ev.last)) {
+            return Ok(());
+        }
+        let t = Instant::now();
+        let name = format!("{stem}_{step:04}.vtu");
+        let u = match (ev.u, ev.contact) {
+            (Some(u), _) => u.clone(),
+            (None, Some(st)) => model.contact_displacement(ev.scale, st),
+            (None, None) => unreachable!("a step has a solution or a contact state"),
+        };
+        let bytes = bodies_vtu(&model, &u, case).map_err(|e| RunError::Write {
+            path: name.clone(),
+            source: std::io::Error::other(e.to_string()),
+        })?;
+        wr(&out_dir.join(&name), &bytes)?;
+        pvd.push(PvdEntry {
+            time: ev.time,
+            part: 0,
+            file: name,
+        });
+        if let Some(st) = ev.contact {
+            let cname = format!("{stem}_contact_{step:04}.vtu");
+            let bytes = contact_vtu(&model, st).map_err(|e| RunError::Write {
+                path: cname.clone(),
                 source: std::io::Error::other(e.to_string()),
             })?;
-            wr(&out_dir.join(&name), &bytes)?;
+            wr(&out_dir.join(&cname), &bytes)?;
             pvd.push(PvdEntry {
                 time: ev.time,
-                part: 0,
-                file: name,
+                part: 1,
+                file: cname,
             });
-            if let Some(st) = ev.contact {
-                let cname = format!("{stem}_contact_{step:04}.vtu");
-                let bytes = contact_vtu(&model, st).map_err(|e| RunError::Write {
-                    path: cname.clone(),
-                    source: std::io::Error::other(e.to_string()),
-                })?;
-                wr(&out_dir.join(&cname), &bytes)?;
-                pvd.push(PvdEntry {
-                    time: ev.time,
-                    part: 1,
-                    file: cname,
-                });
-                wr(
-                    &out_dir.join(format!("contact_{step:04}.csv")),
-                    contact_csv(&model, st).as_bytes(),
-                )?;
-            }
             wr(
-                &out_dir.join(format!("{stem}.pvd")),
-                output::pvd(&pvd).as_bytes(),
+                &out_dir.join(format!("contact_{step:04}.csv")),
+                contact_csv(&model, st).as_bytes(),
             )?;
-            t_write += t.elapsed().as_secs_f64();
-            Ok(())
-        },
-    )?;
+        }
+        wr(
+            &out_dir.join(format!("{stem}.pvd")),
+            output::pvd(&pvd).as_bytes(),
+        )?;
+        t_write += t.elapsed().as_secs_f64();
+        Ok(())
+    })?;
     let Simulation {
         records,
         failure,
@@ -1359,7 +1355,7 @@ pub fn sweep(model: &Model, case: &Case, laws: &[crate::friction::FrictionLaw]) 
         .enumerate()
         .map(|(index, law)| {
             let t = Instant::now();
-            let res = simulate(model, case, Some(law), true, &mut |_| Ok(()));
+            let res = simulate(model, case, Some(law), LogLevel::Error, &mut |_| Ok(()));
             let wall_s = t.elapsed().as_secs_f64();
             match res {
                 Ok(sim) => {

@@ -303,6 +303,7 @@ fn newton_jacobian_matches_finite_differences() {
             kappa: 100.0,
             max_iterations: 80,
             tolerance: 1e-12,
+            verbose: false,
         };
         let mut st = cm.system.initial_state();
         for q in [0.0, 0.3, 0.6] {

@@ -41,6 +41,7 @@ fn solve_model(model: &Model, load: f64, method: Method, kappa: f64) -> Solution
         kappa,
         max_iterations: 100,
         tolerance: 1e-10,
+        verbose: false,
     };
     let prev = cm.system.initial_state();
     let out = model

@@ -156,6 +156,8 @@ pub struct Options {
     /// Relative tolerance on the update of the forces (Newton), and on the penetration
     /// relative to the element size (augmented Lagrangian).
     pub tolerance: f64,
+    /// Print every iteration (sets and update) to standard error.
+    pub verbose: bool,
 }
 
 /// Result of one step solve.
@@ -316,6 +318,15 @@ impl ContactSystem {
                         changes += 1;
                         status[j] = new;
                     }
+                }
+                if opt.verbose {
+                    let count = |st: Status| status.iter().filter(|s| **s == st).count();
+                    eprintln!(
+                        "    Newton iteration {it}: {} in contact ({} stick, {} slip), {changes} changed state, relative update {last_update:.2e}",
+                        ns - count(Status::Open),
+                        count(Status::Stick),
+                        count(Status::Slip)
+                    );
                 }
                 // With the sets unchanged the last linear solve is the answer when the equations
                 // are linear in the sets (constant μ); a slip-dependent μ also needs a small update.
