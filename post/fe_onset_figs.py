@@ -18,8 +18,9 @@ Writes the cases and sweep files into OUTDIR/runs, runs them with `stickslip run
 and the tables (printed, and in OUTDIR/fe_onset_tables.md, OUTDIR/fe_onset_results.json).
 
 Mesh: every law runs on the coarsest VM272 level >= --level (default 4) whose contact edges
-satisfy h <= s0/2 (s0/a = 4 chi/pi at the centre, h measured by a normal-load probe run of each
-level); if even L5 does not resolve s0 the run is made on L5 and marked unresolved.
+satisfy h <= s0/2 (s0/a = 2 Lambda/pi at the centre, eq. (s0); h measured by a normal-load probe
+run of each level): Lambda >= 0.031 on L5, >= 0.061 on L4, >= 0.121 on L3. If even L5 does not
+resolve s0 the law runs on L5 and is marked unresolved (open markers in Fig. 6).
 The step-law check (Delta = 1e-9 mm, f_s = 0.15, 0.3, 0.5, f_d = 0.1) always runs on L3, L4, L5.
 
 Numbers: a = 0.6808 mm (Hertz, P = 10 N/mm) normalises c; f_d P = 1 N/mm.
@@ -56,7 +57,9 @@ LEVELS = (3, 4, 5)
 
 # ---- the laws ---------------------------------------------------------------------------------
 FIG4_PSI = [0.01, 0.05, 0.1, 0.2, 0.5]          # FE points, all with Lambda = FIG4_LAMBDA
-FIG4_LAMBDA = 0.025
+FIG4_LAMBDA = 0.04      # smallest round Lambda with s0 resolved on L5 (needs Lambda >= pi h/a)
+SUPP_LAMBDA = 0.025     # the same Psi with Lambda = 0.025 (force control only; not resolved)
+MESH_CHECK = (0.1, 0.04)  # (Psi, Lambda) run on L3, L4, L5 (force control)
 FIG4_CURVES = [0.0, 0.01, 0.05, 0.1, 0.2, 0.5]  # closed-form JKR curves
 FIG5_PSI = 0.1
 FIG5_LAMBDAS = [0.025, 0.05, 0.1, 0.2, 0.4]     # table; the figure shows 0.025 and 0.4
@@ -65,6 +68,7 @@ FIG6_CHI = [0.02, 0.05, 0.1, 0.2]               # FE points
 FIG6_RATIOS = [1.25, 1.5, 2.0, 2.5, 3.0]
 FIG6_CURVES = [0.001, 0.01, 0.02, 0.05, 0.1, 0.2]
 STEP_FS = [0.15, 0.3, 0.5]
+FORCE_STEPS = 150       # force-controlled sweeps: load steps up to 1.3 x the largest JKR Q_max
 STEP_DELTA = 1e-9
 
 
@@ -166,9 +170,11 @@ def probe_levels(runner, levels):
     return h
 
 
-def pick_level(chi, h, lmin):
-    """Coarsest level >= lmin with h <= s0/2, s0 = (4/pi) chi a; else the finest."""
-    s0 = 4.0 / math.pi * chi * A
+def pick_level(lam, h, lmin):
+    """Coarsest level >= lmin with h <= s0/2, where s0 = E* Delta / (pi (f_s - f_d) p0) at the
+    centre, i.e. s0/a = 2 Lambda / pi (eq. s0 with p0 = E* a / 2R; the run summary's criterion);
+    else the finest level (not resolved)."""
+    s0 = 2.0 / math.pi * lam * A
     for L in sorted(h):
         if L >= lmin and h[L] <= 0.5 * s0:
             return L, True
@@ -246,6 +252,12 @@ def fig4(binary, out, d4, sweeps):
     for psi, col in cmap.items():
         d = af.run_csv(binary, "jkr-curve", "--psi", psi, "--n", 401)
         af.plot_styled(ax, d["c_over_a"], d["q_ratio"], d["stable"], col, rf"$\Psi$={psi:g}")
+        if psi in FIG4_PSI:
+            d = af.run_csv(binary, "dcm-curve", "--psi", psi, "--lambda", FIG4_LAMBDA, "--n", 401)
+            ok = d["stable"] & (d["branch"] == "dcm")
+            ax.plot(d["c_over_a"][ok], d["q_ratio"][ok], "--", color=col, lw=0.8)
+    ax.plot([], [], "--", color="0.4", lw=0.8,
+            label=rf"double C-M, $\Lambda$={FIG4_LAMBDA:g} (stable part)")
     for psi in FIG4_PSI:
         r = d4[psi]
         if r["curve"] is None:
@@ -264,7 +276,8 @@ def fig4(binary, out, d4, sweeps):
     ax.set_ylim(0, 2.0)
     ax.set_xlabel("$c/a$")
     ax.set_ylabel(r"$Q_x/f_dP$")
-    ax.set_title(r"Fig. 4: JKR limit with FE points (ramp laws, $\Lambda$=0.025)" "\n"
+    ax.set_title(rf"Fig. 4: JKR limit with FE points (ramp laws, $\Lambda$={FIG4_LAMBDA:g}, "
+                 rf"L{d4[FIG4_PSI[0]]['level']})" "\n"
                  "(dotted: unstable under force control)", fontsize=10)
     ax.legend(fontsize=7.5, loc="lower left", ncol=2)
     fig.tight_layout()
@@ -285,7 +298,8 @@ def fig5(binary, out, d5):
         if r["curve"] is not None:
             cc, qq = thin(r["curve"]["c"], r["curve"]["q"], dc=0.025)
             ax.plot(cc, qq, "o", ms=4, mfc="none", mew=1.0, color=col,
-                    label=rf"FE, $\Lambda$={lam:g} ($f_s/f_d$={r['r']:g}, L{r['level']})")
+                    label=rf"FE, $\Lambda$={lam:g} ($f_s/f_d$={r['r']:g}, L{r['level']}"
+                    + ("" if r["resolved"] else r", $h>s_0/2$") + ")")
         if r.get("q_force") is not None:
             ax.plot(r["c_force"], r["q_force"], "D", ms=5, color=col, mec="k", mew=0.5)
     ax.plot([], [], "D", ms=5, color="0.6", mec="k", mew=0.5, label=r"FE $Q_{max}$, force control")
@@ -311,14 +325,18 @@ def fig6(binary, out, d6, steps):
                        "--dcm")
         af.plot_styled(ax, d["q_max_jkr"], d["fs_over_fd"], d["small_scale_ok"], col,
                        rf"$\chi$={chi:g}", other_style="--")
-        ax.plot(d["q_max_dcm"], d["fs_over_fd"], ":", color=col, lw=1.0)
-    ax.plot([], [], ":", color="0.4", lw=1.0, label="double C-M")
+        ax.plot(d["q_max_dcm"][3::6], d["fs_over_fd"][3::6], "+", ms=4, mew=0.8, color=col)
+    ax.plot([], [], "+", ms=4, mew=0.8, color="0.4", label="double C-M")
     for chi in FIG6_CHI:
-        pts = [(r["q_fe"], r["r"]) for r in d6 if r["chi"] == chi and r["q_fe"] is not None]
-        if pts:
-            x, y = zip(*pts)
-            ax.plot(x, y, "o", ms=5.5, color=cmap[chi], mec="k", mew=0.6)
-    ax.plot([], [], "o", ms=5.5, color="0.6", mec="k", mew=0.6, label="FE (force control)")
+        for res in (True, False):
+            pts = [(r["q_fe"], r["r"]) for r in d6 if abs(r["chi"] - chi) < 1e-12
+                   and r["q_fe"] is not None and bool(r["resolved"]) == res]
+            if pts:
+                x, y = zip(*pts)
+                ax.plot(x, y, "o", ms=5.5, color=cmap[chi] if res else "w", mec=cmap[chi] if
+                        not res else "k", mew=0.6 if res else 1.3, zorder=4)
+    ax.plot([], [], "o", ms=5.5, color="0.6", mec="k", mew=0.6, label="FE, force control")
+    ax.plot([], [], "o", ms=5.5, color="w", mec="0.4", mew=1.3, label=r"FE, $h>s_0/2$")
     marks = {3: "v", 4: "s", 5: "^"}
     for L in LEVELS:
         pts = [(s["q_fe"], s["r"]) for s in steps if s["level"] == L and s["r"] <= 3.0]
@@ -327,13 +345,13 @@ def fig6(binary, out, d6, steps):
             ax.plot(x, y, marks[L], ms=5, mfc="none", color="0.25", mew=1.0,
                     label=rf"FE step law, $\Delta$=1e-9 mm, L{L}")
     ax.plot([1, 3], [1, 3], color="0.7", lw=0.8, label=r"$Q_{max}/P=f_s$")
-    ax.set_xlim(0.95, 2.0)
+    ax.set_xlim(0.95, 1.8)
     ax.set_ylim(1, 3.05)
     ax.set_xlabel(r"$Q_{max}/f_dP$")
     ax.set_ylabel(r"$f_s/f_d$")
     ax.set_title("Fig. 6: apparent static friction with FE points\n"
                  r"(JKR; dashed: $s_0/c>0.1$ at the maximum)", fontsize=10)
-    ax.legend(fontsize=7, loc="upper right", ncol=2)
+    ax.legend(fontsize=7, loc="lower right", framealpha=0.95)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "fe_fig6.png"), dpi=150)
     plt.close(fig)
@@ -352,6 +370,23 @@ def md_table(head, rows):
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     lines += ["| " + " | ".join(str(v) for v in r) + " |" for r in rows]
     return "\n".join(lines)
+
+
+def law_item(psi=None, lam=None, chi=None, r=None, level=None, h=None, lmin=4, binary=None):
+    """A ramp law from two of (Psi, Lambda, chi, r = f_s/f_d), with its mesh level."""
+    if r is None:
+        r = 1.0 + (math.sqrt(psi / lam) if psi is not None else chi / lam)
+    if lam is None:
+        lam = chi / (r - 1.0)
+    d = {"r": r, "lam": lam, "chi": (r - 1.0) * lam, "psi": (r - 1.0) ** 2 * lam}
+    if level is None:
+        d["level"], d["resolved_pred"] = pick_level(lam, h, lmin)
+    else:
+        d["level"], d["resolved_pred"] = level, h[level] <= lam * A / math.pi
+    d["theory"] = theory(binary, d["chi"], r)
+    d["law"] = ramp(r, lam)
+    d["resolved"] = None
+    return d
 
 
 def main():
@@ -375,53 +410,49 @@ def main():
     runner = Runner(binary, a.outdir, a.reuse, a.jobs)
     h = probe_levels(runner, LEVELS)
     print("contact edge size h per level: " +
-          ", ".join(f"L{L} {h[L]:.5f} mm (a/{A / h[L]:.1f})" for L in LEVELS))
+          ", ".join(f"L{L} {h[L]:.5f} mm (a/{A / h[L]:.1f}; s0 resolved for "
+                    f"Lambda >= {math.pi * h[L] / A:.3f})" for L in LEVELS))
+    mk = dict(h=h, lmin=a.level, binary=binary)
 
-    # ---- the laws of Figs. 4 and 5 (displacement control + force control) -------------------
-    disp = {}   # key -> dict
-    for psi in FIG4_PSI:
-        lam = FIG4_LAMBDA
-        r = 1.0 + math.sqrt(psi / lam)
-        disp[law_key(r, lam)] = {"psi": psi, "lam": lam, "r": r}
-    for lam in FIG5_LAMBDAS:
-        r = 1.0 + math.sqrt(FIG5_PSI / lam)
-        disp.setdefault(law_key(r, lam), {"psi": FIG5_PSI, "lam": lam, "r": r})
-    for k, d in disp.items():
-        d["chi"] = (d["r"] - 1.0) * d["lam"]
-        d["level"], d["resolved_pred"] = pick_level(d["chi"], h, a.level)
-        d["theory"] = theory(binary, d["chi"], d["r"])
-        d["law"] = ramp(d["r"], d["lam"])
+    # ---- laws -----------------------------------------------------------------------------------
+    d4 = {psi: law_item(psi=psi, lam=FIG4_LAMBDA, **mk) for psi in FIG4_PSI}
+    d5 = {lam: law_item(psi=FIG5_PSI, lam=lam, **mk) for lam in FIG5_LAMBDAS}
+    supp = {psi: law_item(psi=psi, lam=SUPP_LAMBDA, **mk) for psi in FIG4_PSI}
+    mesh = {L: law_item(psi=MESH_CHECK[0], lam=MESH_CHECK[1], level=L, **{**mk, "lmin": L})
+            for L in LEVELS}
+    fig6_rows = [law_item(chi=chi, r=r, **mk) for chi in FIG6_CHI for r in FIG6_RATIOS]
+
+    # ---- displacement control (Figs. 4, 5), runs in parallel --------------------------------
+    disp = {}
+    for d in list(d4.values()) + list(d5.values()):
+        disp.setdefault((law_key(d["r"], d["lam"]), d["level"]), d)
 
     def job(item):
-        k, d = item
-        return k, disp_run(runner, "disp_" + k, d["law"], d["level"], d["theory"]["q_jkr"],
-                           threads=1 if a.jobs > 1 else 2)
+        (k, L), d = item
+        return item[0], disp_run(runner, f"disp_{k}_L{L}", d["law"], L, d["theory"]["q_jkr"],
+                                 threads=1 if a.jobs > 1 else 2)
 
     with cf.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
-        for k, (code, err, out, hist) in ex.map(job, list(disp.items())):
-            d = disp[k]
-            d["code"], d["err"] = code, err
-            runner.log.append(("disp_" + k, code, err))
-            d["curve"] = fe_curve(hist) if hist is not None else None
+        for key, (code, err, out, hist) in ex.map(job, list(disp.items())):
+            res = dict(code=code, err=err, curve=fe_curve(hist) if hist is not None else None)
+            runner.log.append((f"disp_{key[0]}_L{key[1]}", code, err))
             sp = os.path.join(out, "summary.json")
-            d["resolved"] = json.load(open(sp))["friction"]["resolved"] \
-                if os.path.isfile(sp) else None
+            if os.path.isfile(sp):
+                res["resolved"] = json.load(open(sp))["friction"]["resolved"]
+            for d in list(d4.values()) + list(d5.values()):
+                if (law_key(d["r"], d["lam"]), d["level"]) == key:
+                    d.update(res)
     print(f"displacement-controlled runs done ({time.time() - t0:.0f} s)")
 
-    # ---- force-controlled sweeps, one per level: Figs. 4/5 laws and Fig. 6 laws -------------
-    fig6_rows = []
-    for chi in FIG6_CHI:
-        for r in FIG6_RATIOS:
-            lam = chi / (r - 1.0)
-            L, ok = pick_level(chi, h, a.level)
-            fig6_rows.append({"chi": chi, "r": r, "lam": lam, "level": L, "resolved_pred": ok,
-                              "law": ramp(r, lam), "theory": theory(binary, chi, r)})
+    # ---- force control: one sweep per level -----------------------------------------------------
+    force_items = (list(d4.values()) + list(d5.values()) + list(supp.values()) +
+                   list(mesh.values()) + fig6_rows)
     by_level = {}
-    for d in list(disp.values()) + fig6_rows:
+    for d in force_items:
         by_level.setdefault(d["level"], []).append(d)
     for L, items in sorted(by_level.items()):
         qtop = max(d["theory"]["q_jkr"] for d in items)
-        case = runner.case(L, {"name": "tangential", "steps": 40,
+        case = runner.case(L, {"name": "tangential", "steps": FORCE_STEPS,
                                "pilot_x": {"force": round(1.3 * qtop * FDP, 3)}})
         laws, seen = [], {}
         for d in items:
@@ -441,7 +472,8 @@ def main():
             d["q_fe"] = d["q_force"]
             d["status"] = row["status"]
             d["resolved"] = f["resolved"] if d.get("resolved") is None else d["resolved"]
-            d["q_jkr_summary"] = f["apparent_friction_jkr"] / FD
+            if not lost:
+                runner.log.append((f"sweep_L{L} law {d['sweep_index']}", "-", row["status"]))
         print(f"sweep on L{L}: {len(laws)} laws, {res['sweep_s']:.1f} s "
               f"({time.time() - t0:.0f} s so far)")
 
@@ -460,26 +492,26 @@ def main():
         print(f"step-law sweep on L{L}: {res['sweep_s']:.1f} s ({time.time() - t0:.0f} s so far)")
 
     # ---- figures ------------------------------------------------------------------------------
-    d4 = {d["psi"]: d for d in disp.values() if d["lam"] == FIG4_LAMBDA}
-    d5 = {d["lam"]: d for d in disp.values() if abs(d["psi"] - FIG5_PSI) < 1e-12}
     fig4(binary, a.outdir, d4, None)
     fig5(binary, a.outdir, d5)
     fig6(binary, a.outdir, fig6_rows, steps)
 
     # ---- tables -------------------------------------------------------------------------------
-    out_md = []
-    head = ["Ψ", "f_s/f_d", "Λ", "χ", "mesh", "s0 resolved", "Q_max FE (disp.)",
-            "Q_max FE (force)", "JKR", "DCM", "FE−JKR %", "FE−DCM %", "c_peak/a FE",
-            "c_max/a JKR", "c_max/a DCM"]
+    head = ["Ψ", "f_s/f_d", "Λ", "χ", "mesh", "h/s0", "Q_max FE force", "Q_max FE disp.",
+            "JKR", "DCM", "FE−JKR %", "FE−DCM %", "c/a FE disp. peak", "c_max/a JKR",
+            "c_max/a DCM"]
 
-    def disp_rows(items):
+    def h_s0(d):
+        return h[d["level"]] / (2.0 / math.pi * d["lam"] * A)
+
+    def law_rows(items, with_disp=True):
         rows = []
         for d in items:
-            t, cu = d["theory"], d["curve"]
-            qd = cu["q_peak"] if cu else None
+            t, cu = d["theory"], d.get("curve") if with_disp else None
             qf = d.get("q_force")
             rows.append([f"{d['psi']:g}", f"{d['r']:.3f}", f"{d['lam']:g}", f"{d['chi']:.4f}",
-                         f"L{d['level']}", "yes" if d["resolved"] else "no", fmt(qd), fmt(qf),
+                         f"L{d['level']}", f"{h_s0(d):.2f}" + ("" if d["resolved"] else " ✗"),
+                         fmt(qf), fmt(cu["q_peak"]) if cu else "—",
                          fmt(t["q_jkr"]), fmt(t["q_dcm"]),
                          fmtp(pct(qf, t["q_jkr"]) if qf else None),
                          fmtp(pct(qf, t["q_dcm"]) if qf else None),
@@ -487,16 +519,19 @@ def main():
                          fmt(t["c_dcm"], 3)])
         return rows
 
-    t4 = md_table(head, disp_rows([d4[p_] for p_ in FIG4_PSI]))
-    t5 = md_table(head, disp_rows([d5[l_] for l_ in FIG5_LAMBDAS]))
-    head6 = ["χ", "f_s/f_d", "Λ", "mesh", "s0 resolved", "s0/c (JKR max)", "Q_max FE",
-             "JKR", "DCM", "FE−JKR %", "FE−DCM %", "c/a FE (last)", "c_max/a DCM"]
+    t4 = md_table(head, law_rows([d4[x] for x in FIG4_PSI]))
+    t4s = md_table(head, law_rows([supp[x] for x in FIG4_PSI], with_disp=False))
+    t5 = md_table(head, law_rows([d5[x] for x in FIG5_LAMBDAS]))
+    tm = md_table(head, law_rows([mesh[L] for L in LEVELS], with_disp=False))
+    head6 = ["χ", "f_s/f_d", "Λ", "mesh", "h/s0", "s0/c at JKR max", "Q_max FE", "JKR", "DCM",
+             "FE−JKR %", "FE−DCM %", "c/a FE (last)", "c_max/a DCM"]
     rows6 = []
     for d in fig6_rows:
         t = d["theory"]
         q = d["q_fe"]
         rows6.append([f"{d['chi']:g}", f"{d['r']:g}", f"{d['lam']:.4g}", f"L{d['level']}",
-                      "yes" if d["resolved"] else "no", f"{t['s0_over_c']:.3f}", fmt(q),
+                      f"{h_s0(d):.2f}" + ("" if d["resolved"] else " ✗"),
+                      f"{t['s0_over_c']:.3f}", fmt(q),
                       fmt(t["q_jkr"]), fmt(t["q_dcm"]), fmtp(pct(q, t["q_jkr"]) if q else None),
                       fmtp(pct(q, t["q_dcm"]) if q else None), fmt(d["c_force"], 3),
                       fmt(t["c_dcm"], 3)])
@@ -506,7 +541,6 @@ def main():
     rowss = [[f"{s['fs']:g}", f"{s['r']:g}", f"L{s['level']}", f"{s['h'] / A:.4f}",
               fmt(s["q_fe"]), fmt(s["q_fe"] - 1.0 if s["q_fe"] else None),
               fmt(s["q_jkr"], 5)] for s in steps]
-    # observed order of the excess in h, per f_s (L3->L4 and L4->L5)
     order_lines = []
     for fs in STEP_FS:
         ex = {s["level"]: s["q_fe"] - 1.0 for s in steps if s["fs"] == fs and s["q_fe"]}
@@ -516,11 +550,19 @@ def main():
             order_lines.append(f"f_s = {fs:g}: excess ∝ h^p with p = {p1:.2f} (L3→L4), "
                                f"{p2:.2f} (L4→L5)")
     ts = md_table(heads, rowss)
-    out_md += ["### Fig. 4: Ψ series (ramp laws, Λ = 0.025)", "", t4, "",
-               "### Fig. 5: Ψ = 0.1, Λ series", "", t5, "",
-               "### Fig. 6: χ series (force control)", "", t6, "",
-               "### Step law, Δ = 1e-9 mm (χ → 0), f_d = 0.1", "", ts, ""] + \
-              ["* " + s for s in order_lines]
+    legend = ("Q_max in units of f_d P. 'FE force': force control past the peak (bisection "
+              "bracket, 12 halvings); 'FE disp.': largest sampled Q under displacement control; "
+              "deviations use the force-controlled value. h/s0 with s0 = 2Λa/π at the centre; "
+              "✗ = h > s0/2 (not resolved).")
+    out_md = [legend, "",
+              f"### Fig. 4: Ψ series (ramp laws, Λ = {FIG4_LAMBDA:g})", "", t4, "",
+              f"### Fig. 4 laws with Λ = {SUPP_LAMBDA:g} (force control)", "", t4s, "",
+              f"### Mesh check: Ψ = {MESH_CHECK[0]:g}, Λ = {MESH_CHECK[1]:g} on L3, L4, L5",
+              "", tm, "",
+              f"### Fig. 5: Ψ = {FIG5_PSI:g}, Λ series", "", t5, "",
+              "### Fig. 6: χ series (force control)", "", t6, "",
+              f"### Step law, Δ = {STEP_DELTA:g} mm (χ → 0), f_d = {FD:g}", "", ts, ""] + \
+             ["* " + s for s in order_lines]
     text = "\n".join(out_md)
     print()
     print(text)
@@ -528,10 +570,13 @@ def main():
         f.write(text + "\n")
 
     def clean(d):
-        return {k: (v.tolist() if isinstance(v, np.ndarray) else
-                    (clean(v) if isinstance(v, dict) else v)) for k, v in d.items()}
+        return {str(k): (v.tolist() if isinstance(v, np.ndarray) else
+                         (clean(v) if isinstance(v, dict) else v)) for k, v in d.items()}
     with open(os.path.join(a.outdir, "fe_onset_results.json"), "w") as f:
-        json.dump({"h": h, "disp": {k: clean(d) for k, d in disp.items()},
+        json.dump({"h": h, "fig4": [clean(d4[x]) for x in FIG4_PSI],
+                   "fig4_lambda_0.025": [clean(supp[x]) for x in FIG4_PSI],
+                   "mesh_check": [clean(mesh[L]) for L in LEVELS],
+                   "fig5": [clean(d5[x]) for x in FIG5_LAMBDAS],
                    "fig6": [clean(d) for d in fig6_rows], "step": steps}, f, indent=1)
 
     print()

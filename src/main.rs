@@ -61,7 +61,11 @@ enum Cmd {
     },
 }
 
+/// Sets up the thread pools of rayon and faer (`None`: all cores); refuses `Some(0)`.
 fn set_threads(n: Option<usize>) -> Result<(), String> {
+    if n == Some(0) {
+        return Err("--threads must be at least 1".into());
+    }
     let n = n.unwrap_or(0);
     rayon::ThreadPoolBuilder::new()
         .num_threads(n)
@@ -85,10 +89,6 @@ fn main() -> ExitCode {
             quiet,
             log,
         } => {
-            if threads == Some(0) {
-                eprintln!("error: --threads must be at least 1");
-                return ExitCode::from(2);
-            }
             if let Err(e) = set_threads(threads) {
                 eprintln!("error: {e}");
                 return ExitCode::from(2);
@@ -109,10 +109,6 @@ fn main() -> ExitCode {
             threads,
             quiet,
         } => {
-            if threads == Some(0) {
-                eprintln!("error: --threads must be at least 1");
-                return ExitCode::from(2);
-            }
             if let Err(e) = set_threads(threads) {
                 eprintln!("error: {e}");
                 return ExitCode::from(2);
