@@ -8,14 +8,18 @@ Writes the cases and sweep files into OUTDIR/runs, runs them with `stickslip run
 `stickslip sweep`, and draws into OUTDIR:
 
   fe_fig4.png  Q_x/(f_d P) vs c/a, JKR curves for several Psi (dotted: unstable branch) with FE
-               points from displacement-controlled runs (ramp laws with Lambda = 0.025).
+               points from displacement-controlled runs (ramp laws with Lambda = 0.04, the
+               smallest round value whose s0 the finest mesh resolves) and the force-controlled
+               Q_max; thin dashed: double C-M for the same laws.
   fe_fig5.png  Psi = 0.1, Lambda = 0.025 and 0.4: FE Q-c points against the double C-M and JKR
                curves.
   fe_fig6.png  f_s/f_d vs the apparent Q_max/(f_d P) for several chi (JKR curves, dashed where
                s0/c > 0.1; double C-M dotted) with FE points from force-controlled sweeps, and
                the step law with Delta = 1e-9 mm (chi -> 0) on three meshes.
 
-and the tables (printed, and in OUTDIR/fe_onset_tables.md, OUTDIR/fe_onset_results.json).
+and the tables (printed, and in OUTDIR/fe_onset_tables.md, OUTDIR/fe_onset_results.json):
+Figs. 4/5 laws also with Lambda = 0.025 (force control), a mesh check (Psi = 0.1, Lambda = 0.04
+on L3, L4, L5), and the step law with Delta = 1e-9 mm (Q_max -> f_d P as h -> 0).
 
 Mesh: every law runs on the coarsest VM272 level >= --level (default 4) whose contact edges
 satisfy h <= s0/2 (s0/a = 2 Lambda/pi at the centre, eq. (s0); h measured by a normal-load probe
@@ -245,7 +249,7 @@ def pct(x, ref):
 
 
 # ---- figures ----------------------------------------------------------------------------------
-def fig4(binary, out, d4, sweeps):
+def fig4(binary, out, d4):
     fig, ax = plt.subplots(figsize=(6.4, 4.8))
     colors = plt.cm.viridis(np.linspace(0, 0.9, len(FIG4_CURVES)))
     cmap = dict(zip(FIG4_CURVES, colors))
@@ -492,7 +496,7 @@ def main():
         print(f"step-law sweep on L{L}: {res['sweep_s']:.1f} s ({time.time() - t0:.0f} s so far)")
 
     # ---- figures ------------------------------------------------------------------------------
-    fig4(binary, a.outdir, d4, None)
+    fig4(binary, a.outdir, d4)
     fig5(binary, a.outdir, d5)
     fig6(binary, a.outdir, fig6_rows, steps)
 
