@@ -207,44 +207,32 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
                     node: t,
                 })
             };
-            if kind == 9 {
-                if el.nodes.len() != 6 {
+            // The element's nodes as mesh indices, checking the count.
+            let resolve = |want: usize| -> Result<Vec<usize>, MeshReadError> {
+                if el.nodes.len() != want {
                     return Err(MeshReadError::Parse {
-                        path: p,
+                        path: p.clone(),
                         detail: format!(
-                            "element {} has {} nodes, 6 expected",
+                            "element {} has {} nodes, {want} expected",
                             el.element_tag,
                             el.nodes.len()
                         ),
                     });
                 }
-                let mut n = [0usize; 6];
-                for k in 0..6 {
-                    n[k] = idx(el.nodes[k])?;
-                }
+                el.nodes.iter().map(|&t| idx(t)).collect()
+            };
+            if kind == 9 {
+                let n = resolve(6)?;
                 local.push(mesh.triangles.len());
                 mesh.triangles.push(Tri6 {
-                    nodes: n,
+                    nodes: std::array::from_fn(|k| n[k]),
                     tag: el.element_tag,
                 });
             } else {
-                if el.nodes.len() != 3 {
-                    return Err(MeshReadError::Parse {
-                        path: p,
-                        detail: format!(
-                            "element {} has {} nodes, 3 expected",
-                            el.element_tag,
-                            el.nodes.len()
-                        ),
-                    });
-                }
-                let mut n = [0usize; 3];
-                for k in 0..3 {
-                    n[k] = idx(el.nodes[k])?;
-                }
+                let n = resolve(3)?;
                 local.push(mesh.lines.len());
                 mesh.lines.push(Lin3 {
-                    nodes: n,
+                    nodes: std::array::from_fn(|k| n[k]),
                     tag: el.element_tag,
                 });
             }
