@@ -6,7 +6,9 @@
 //! change the mesh level). Output is written only at the last step.
 
 use std::path::PathBuf;
-use std::process::Command;
+
+#[path = "common/mod.rs"]
+mod common;
 
 fn main() {
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
@@ -35,27 +37,8 @@ fn main() {
         if case == "vm272_cm" {
             v["stages"][1]["steps"] = serde_json::json!(40);
         }
-        let path = tmp.join(format!("{case}.json"));
-        std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
-        let out = tmp.join(case);
-        let t = std::time::Instant::now();
-        let st = Command::new(env!("CARGO_BIN_EXE_stickslip"))
-            .args([
-                "run",
-                path.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-                "--quiet",
-                "--threads",
-                &threads,
-            ])
-            .status()
-            .unwrap();
-        let wall = t.elapsed().as_secs_f64();
-        assert!(st.success(), "{case} failed");
-        let s: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-                .unwrap();
+        let (ok, wall, s) = common::run_case(&v, case, &tmp, &threads);
+        assert!(ok, "{case} failed");
         let g = |k: &str| s["timings_s"][k].as_f64().unwrap();
         let newton = s["contact_solve_s"].as_f64().unwrap();
         let floor = g("assemble") + g("analyse") + g("factorise");

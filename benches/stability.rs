@@ -12,6 +12,9 @@
 
 use serde_json::{Value, json};
 use std::path::PathBuf;
+
+#[path = "common/mod.rs"]
+mod common;
 use std::process::Command;
 
 fn main() {
@@ -70,25 +73,7 @@ fn main() {
                     v["contact"]["friction"]["shape"] = json!(shape);
                     v["stages"][1]["steps"] = json!(steps);
                     let name = format!("{method}_{shape}_{steps}_L{level}");
-                    let path = tmp.join(format!("{name}.json"));
-                    std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
-                    let out = tmp.join(&name);
-                    let st = Command::new(env!("CARGO_BIN_EXE_stickslip"))
-                        .args([
-                            "run",
-                            path.to_str().unwrap(),
-                            "--out",
-                            out.to_str().unwrap(),
-                            "--quiet",
-                            "--threads",
-                            &threads,
-                        ])
-                        .status()
-                        .unwrap();
-                    let s: Value = serde_json::from_str(
-                        &std::fs::read_to_string(out.join("summary.json")).unwrap_or("{}".into()),
-                    )
-                    .unwrap_or(json!({}));
+                    let (ok, _, s) = common::run_case(&v, &name, &tmp, &threads);
                     let steps_done = s["steps"].as_array().map_or(0, |v| v.len());
                     let its = s["newton_iterations"].as_f64().unwrap_or(0.0);
                     let cut: f64 = s["steps"].as_array().map_or(0.0, |v| {
@@ -101,7 +86,6 @@ fn main() {
                         .and_then(|v| v.last())
                         .and_then(|r| r["contact"]["c"].as_f64())
                         .unwrap_or(f64::NAN);
-                    let ok = st.success();
                     let err = if ok { c / c_ref - 1.0 } else { f64::NAN };
                     let status = s["status"]
                         .as_str()

@@ -1,0 +1,35 @@
+//! Shared by the bench targets: run the `stickslip` binary on a case in its own process.
+#![allow(dead_code)]
+
+use serde_json::Value;
+use std::path::Path;
+use std::process::Command;
+
+/// Writes `case` to `dir/name.json`, runs it into `dir/name/` with `--quiet --threads T`, and
+/// returns whether it exited successfully, the wall time of the process and its `summary.json`
+/// (`Value::Null` if none was written).
+pub fn run_case(case: &Value, name: &str, dir: &Path, threads: &str) -> (bool, f64, Value) {
+    let path = dir.join(format!("{name}.json"));
+    std::fs::write(&path, serde_json::to_string(case).expect("serialisable"))
+        .expect("writable temp dir");
+    let out = dir.join(name);
+    let t = std::time::Instant::now();
+    let st = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args([
+            "run",
+            path.to_str().expect("utf-8 path"),
+            "--out",
+            out.to_str().expect("utf-8 path"),
+            "--quiet",
+            "--threads",
+            threads,
+        ])
+        .status()
+        .expect("the stickslip binary runs");
+    let wall = t.elapsed().as_secs_f64();
+    let summary = std::fs::read_to_string(out.join("summary.json"))
+        .ok()
+        .and_then(|s| serde_json::from_str(&s).ok())
+        .unwrap_or(Value::Null);
+    (st.success(), wall, summary)
+}
