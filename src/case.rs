@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// A whole case.
-#[derive(Clone, Debug, Deserialize, Serialize)]
+#[derive(Clone, Debug, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Case {
     /// Optional free text.
@@ -40,7 +40,7 @@ pub struct Case {
 }
 
 /// A body and its material.
-#[derive(Clone, Debug, Deserialize, Serialize)]
+#[derive(Clone, Debug, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Body {
     /// Name of the surface physical group.
@@ -53,7 +53,7 @@ pub struct Body {
 }
 
 /// Prescribed displacement components on a curve group.
-#[derive(Clone, Debug, Deserialize, Serialize)]
+#[derive(Clone, Debug, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Support {
     pub group: String,
@@ -66,14 +66,14 @@ pub struct Support {
 }
 
 /// The rigid pilot face.
-#[derive(Clone, Debug, Deserialize, Serialize)]
+#[derive(Clone, Debug, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Pilot {
     pub group: String,
 }
 
 /// A contact pair.
-#[derive(Clone, Debug, Deserialize, Serialize)]
+#[derive(Clone, Debug, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
     /// Curve group carrying the multipliers (the mortar side).
@@ -232,7 +232,7 @@ impl FrictionSpec {
 }
 
 /// How the contact normal is chosen.
-#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum NormalKind {
     #[default]
@@ -245,7 +245,7 @@ fn default_method() -> crate::contact::solver::Method {
 }
 
 /// How one pilot component is driven at the end of a stage.
-#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, rename_all = "snake_case")]
 pub enum Control {
     /// Total force on the pilot in this direction (per unit thickness).
@@ -255,7 +255,7 @@ pub enum Control {
 }
 
 /// A distributed load on a curve group.
-#[derive(Clone, Debug, Deserialize, Serialize)]
+#[derive(Clone, Debug, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TractionSpec {
     pub group: String,
@@ -275,7 +275,7 @@ pub struct TractionSpec {
     pub x0: Option<f64>,
 }
 
-#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum TractionKind {
     Uniform,
@@ -284,7 +284,7 @@ pub enum TractionKind {
 }
 
 /// A load stage.
-#[derive(Clone, Debug, Deserialize, Serialize)]
+#[derive(Clone, Debug, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Stage {
     #[serde(default)]
@@ -303,7 +303,7 @@ pub struct Stage {
 }
 
 /// Output settings.
-#[derive(Clone, Debug, Deserialize, Serialize)]
+#[derive(Clone, Debug, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Output {
     /// Output directory, relative to the current directory; default `out/<case name>`.
@@ -570,4 +570,36 @@ impl Case {
     pub fn total_steps(&self) -> usize {
         self.stages.iter().map(|s| s.steps).sum()
     }
+}
+
+impl schemars::JsonSchema for FrictionSpec {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "FrictionSpec".into()
+    }
+
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let num = serde_json::json!({"type": "number"});
+        let shaped = serde_json::json!({"enum": ["ramp", "step", "exponential"]});
+        schemars::json_schema!({
+            "description": "A friction law of the accumulated slip: a law, a preset of the paper's Table 1, or a shaped law with Δ from Λ.",
+            "oneOf": [
+                {"type": "object", "additionalProperties": false, "required": ["shape", "mu"],
+                 "properties": {"shape": {"const": "constant"}, "mu": num}},
+                {"type": "object", "additionalProperties": false, "required": ["shape", "fs", "fd", "delta"],
+                 "properties": {"shape": shaped, "fs": num, "fd": num, "delta": num}},
+                {"type": "object", "additionalProperties": false, "required": ["shape", "rows"],
+                 "properties": {"shape": {"const": "table"},
+                                "rows": {"type": "array", "minItems": 2, "items": {"type": "array", "items": num, "minItems": 2, "maxItems": 2}}}},
+                {"type": "object", "additionalProperties": false, "required": ["preset"],
+                 "properties": {"preset": {"enum": crate::friction::FrictionLaw::preset_names()}, "shape": shaped}},
+                {"type": "object", "additionalProperties": false, "required": ["shape", "fs", "fd", "lambda", "radius", "load"],
+                 "properties": {"shape": shaped, "fs": num, "fd": num, "lambda": num, "radius": num, "load": num}}
+            ]
+        })
+    }
+}
+
+/// The JSON Schema of the case file (draft 2020-12), for editors and validators.
+pub fn schema() -> serde_json::Value {
+    serde_json::to_value(schemars::schema_for!(Case)).expect("a schema serialises")
 }

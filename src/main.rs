@@ -54,6 +54,8 @@ enum Cmd {
     },
     /// The paper's closed forms: scalars as JSON, curves as CSV.
     Analytic(stickslip::analytic::cli::AnalyticArgs),
+    /// Print the JSON Schema of the case file.
+    Schema,
     /// Print counts, groups, element sizes and quality figures of a gmsh mesh (JSON).
     MeshInfo {
         /// The mesh file (gmsh MSH 4.1).
@@ -130,6 +132,13 @@ fn main() -> ExitCode {
                     ExitCode::from(2)
                 }
             }
+        }
+        Cmd::Schema => {
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&stickslip::case::schema()).expect("serialisable")
+            );
+            ExitCode::SUCCESS
         }
         Cmd::MeshInfo { mesh } => match stickslip::mesh::gmsh::read(&mesh) {
             Ok(m) => {

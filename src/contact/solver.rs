@@ -33,7 +33,9 @@ use faer::Mat;
 use faer::linalg::solvers::Solve;
 
 /// How the contact conditions are enforced.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {
     /// Semi-smooth Newton (primal–dual active set) on the complementarity functions: exact.
