@@ -331,7 +331,8 @@ impl Model {
         } else {
             xs[hi]
         };
-        fig.a = 0.5 * (right - left);
+        // The face may run in −x (a slave on the upper body): widths are absolute.
+        fig.a = 0.5 * (right - left).abs();
         fig.x_centre = 0.5 * (right + left);
         let half_width = |pred: &dyn Fn(usize) -> bool| -> f64 {
             let idx: Vec<usize> = (0..xs.len()).filter(|&j| pred(j)).collect();
@@ -349,7 +350,7 @@ impl Model {
             } else {
                 xs[b]
             };
-            0.5 * (r - l)
+            0.5 * (r - l).abs()
         };
         fig.c = half_width(&|j| st.status[j] == Status::Stick);
         if let Some(law) = law {
