@@ -20,8 +20,8 @@
 //! * `ACCURACY_CASES` (`hertz,vm272_cm,fig2`);
 //! * `ACCURACY_CCX_LEVELS` (`0-3`): CalculiX levels (`none` skips the CalculiX side);
 //! * `ACCURACY_CCX_TIMEOUT` (1200): seconds per CalculiX level.
-//! Writes the table as markdown on stdout and as CSV to `out/bench/accuracy.csv`; CalculiX's
-//! working files go to `out/bench/calculix/`.
+//! Writes the report as markdown on stdout and to `out/bench/accuracy.md`, the table as CSV to
+//! `out/bench/accuracy.csv`; CalculiX's working files go to `out/bench/calculix/`.
 
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -579,7 +579,18 @@ fn run_ccx(repo: &Path, level: usize, threads: &str, timeout: &str, r: &Referenc
     Some(row)
 }
 
+/// Prints a line and appends it to the report written to `out/bench/accuracy.md`.
+macro_rules! out {
+    ($buf:expr, $($t:tt)*) => {{
+        let s = format!($($t)*);
+        println!("{s}");
+        $buf.push_str(&s);
+        $buf.push('\n');
+    }};
+}
+
 fn main() {
+    let mut rep = String::new();
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let tmp = std::env::temp_dir().join(format!("stickslip-bench-accuracy-{}", std::process::id()));
     std::fs::create_dir_all(&tmp).unwrap();
@@ -599,7 +610,8 @@ fn main() {
     let t_all = Instant::now();
 
     let r = reference();
-    println!(
+    out!(
+        rep,
         "Closed forms (`stickslip analytic`): Hertz a = {:.4} mm, p0 = {:.4} N/mm²; Cattaneo–Mindlin (μ = {MU}, Q = {Q_CM}) c = {:.4} mm (c/a = {:.4}); double C–M (Fig. 2) c/a = {:.4}, b/a = {:.4}.\n",
         r.a,
         r.p0,
@@ -612,9 +624,9 @@ fn main() {
     let mut rows: Vec<Row> = vec![];
     for case in &cases {
         for &level in &levels {
-            eprintln!("stickslip {case} L{level} …");
+            eout!(rep, "stickslip {case} L{level} …");
             let row = run_ours(&repo, &tmp, case, level, &threads, &r);
-            eprintln!("  {}", md_row(&row));
+            eout!(rep, "  {}", md_row(&row));
             rows.push(row);
             write_csv(&csv_path, &rows);
         }
@@ -628,10 +640,10 @@ fn main() {
         ccx_note = "CalculiX side skipped: `ccx` is not on PATH (install it, e.g. `apt-get install -y calculix-ccx`, to compare).".into();
     } else {
         for &level in &ccx_levels {
-            eprintln!("calculix vm272_cm L{level} … (this takes minutes)");
+            eout!(rep, "calculix vm272_cm L{level} … (this takes minutes)");
             match run_ccx(&repo, level, &threads, &ccx_timeout, &r) {
                 Some(row) => {
-                    eprintln!("  {}", md_row(&row));
+                    eout!(rep, "  {}", md_row(&row));
                     rows.push(row);
                     write_csv(&csv_path, &rows);
                 }
@@ -643,28 +655,33 @@ fn main() {
         }
     }
     if !ccx_note.is_empty() {
-        eprintln!("{ccx_note}");
+        eout!(rep, "{ccx_note}");
     }
 
     // ---- the table
-    println!("{MD_HEADER}");
+    out!(rep, "{MD_HEADER}");
     for row in &rows {
-        println!("{}", md_row(row));
+        out!(rep, "{}", md_row(row));
     }
-    println!(
+    out!(
+        rep,
         "\nThreads: {threads} for both codes. Times in s. Our phases from `summary.json` (`contact Newton` is `contact_solve_s`, part of `solve`); `wall` is the wall time of the whole process measured around it (both codes). Errors as fractions: p of p0 (|x| ≤ 0.95a), q of μp0 (vm272_cm) or f_d p0 (fig2) outside the excluded nodes, c and b relative. CalculiX DOFs = its number of equations; its Newton iterations are over all 3 ccx steps."
     );
     if !ccx_note.is_empty() {
-        println!("\n**{ccx_note}**");
+        out!(rep, "\n**{ccx_note}**");
     }
 
     // CalculiX time breakdown
     let ccx_rows: Vec<&Row> = rows.iter().filter(|r| r.code == "calculix").collect();
     if !ccx_rows.is_empty() {
-        println!("\nCalculiX time breakdown (time-stamped ccx log lines, s):\n");
-        println!("| L | wall | breakdown |\n|---|---|---|");
+        out!(
+            rep,
+            "\nCalculiX time breakdown (time-stamped ccx log lines, s):\n"
+        );
+        out!(rep, "| L | wall | breakdown |\n|---|---|---|");
         for c in &ccx_rows {
-            println!(
+            out!(
+                rep,
                 "| {} | {} | {} |",
                 c.level,
                 f(c.wall, 1),
@@ -680,10 +697,12 @@ fn main() {
         .collect();
     let ok_ccx: Vec<&&Row> = ccx_rows.iter().filter(|r| r.ok()).collect();
     if !ok_ccx.is_empty() && !ours_cm.is_empty() {
-        println!(
+        out!(
+            rep,
             "\nCattaneo–Mindlin, (ccx wall)/(stickslip wall), same run: for each ccx level, our cheapest level with p err max AND q err max both ≤ ccx's:\n"
         );
-        println!(
+        out!(
+            rep,
             "| ccx L | ccx wall s | ccx p / q err max | our L | our wall s | our p / q err max | ratio at equal or better error | ratio at the same mesh |\n|---|---|---|---|---|---|---|---|"
         );
         let mut headline = None;
@@ -699,7 +718,8 @@ fn main() {
             match better {
                 Some(o) => {
                     let ratio = c.wall.unwrap() / o.wall.unwrap();
-                    println!(
+                    out!(
+                        rep,
                         "| {} | {} | {} / {} | {} | {} | {} / {} | {:.0} | {} |",
                         c.level,
                         f(c.wall, 1),
@@ -714,7 +734,8 @@ fn main() {
                     );
                     headline = Some((c.level, ratio, o.level));
                 }
-                None => println!(
+                None => out!(
+                    rep,
                     "| {} | {} | {} / {} | none as accurate | — | — | — | {} |",
                     c.level,
                     f(c.wall, 1),
@@ -725,7 +746,8 @@ fn main() {
             }
         }
         if let Some((cl, ratio, ol)) = headline {
-            println!(
+            out!(
+                rep,
                 "\n**Ratio (ccx wall)/(stickslip wall) at equal or better error, Cattaneo–Mindlin: {ratio:.0}** (ccx L{cl}, its finest level run, against our L{ol}, the cheapest level at least as accurate in both p and q; same run, {threads} threads each)."
             );
         }
@@ -739,7 +761,8 @@ fn main() {
     {
         let total = fig.phase_total().unwrap();
         let floor = fig.floor().unwrap();
-        println!(
+        out!(
+            rep,
             "\nFig. 2 on L{}: whole run (sum of phases) {:.3} s / (assemble + analyse + factorise) {:.3} s = **{:.2}** (process wall {:.2} s: {:.2}×)",
             fig.level,
             total,
@@ -755,10 +778,12 @@ fn main() {
         rows.iter()
             .find(|r| r.code == "stickslip" && r.case == case && r.level == l && r.ok())
     };
-    println!(
+    out!(
+        rep,
         "\nTargets: pressure max |p − p_H|/p0 ≤ 0.01 over |x| ≤ 0.95a (hertz, and vm272_cm after the tangential load); shear max |q − q_CM|/(μ p0) ≤ 0.02 outside the excluded nodes (vm272_cm):\n"
     );
-    println!(
+    out!(
+        rep,
         "| L | hertz p max | vm272_cm p max | vm272_cm q max | meets both (hertz p, cm q) | meets all three |\n|---|---|---|---|---|---|"
     );
     let mut cheapest = None;
@@ -776,7 +801,8 @@ fn main() {
         if all && cheapest_all.is_none() {
             cheapest_all = Some(l);
         }
-        println!(
+        out!(
+            rep,
             "| {l} | {} | {} | {} | {} | {} |",
             fe(hp),
             fe(cp),
@@ -786,7 +812,8 @@ fn main() {
         );
     }
     match cheapest {
-        Some(l) => println!(
+        Some(l) => out!(
+            rep,
             "\n**Cheapest adequate level: L{l}** (hertz pressure ≤ 1 % p0 and Cattaneo–Mindlin shear ≤ 2 % μp0){}",
             match cheapest_all {
                 Some(m) if m == l =>
@@ -796,12 +823,14 @@ fn main() {
                     .to_string(),
             }
         ),
-        None => println!("\n**No level of the ladder run meets both targets.**"),
+        None => out!(rep, "\n**No level of the ladder run meets both targets.**"),
     }
-    println!(
+    out!(
+        rep,
         "\nCSV: {}; whole bench {:.0} s.",
         csv_path.strip_prefix(&repo).unwrap_or(&csv_path).display(),
         t_all.elapsed().as_secs_f64()
     );
+    std::fs::write(benchdir.join("accuracy.md"), &rep).unwrap();
     let _ = std::fs::remove_dir_all(&tmp);
 }
