@@ -11,6 +11,7 @@
 //! * `fig2`: c_FE/c − 1 and b_FE/b − 1 against the double Cattaneo–Mindlin solution, and
 //!   max and RMS of |q − q_2CM|/(f_d p0), eq. (qx2CM), outside the transition zone c < |x| < b
 //!   and two elements of |x| = c, b, a.
+//!
 //! The CalculiX side (`post/calculix/ccx_vm272.py`, the Cattaneo–Mindlin problem) runs on its
 //! own levels with the same thread count, and its nodal p, q are scored by the same functions.
 //!
@@ -20,6 +21,7 @@
 //! * `ACCURACY_CASES` (`hertz,vm272_cm,fig2`);
 //! * `ACCURACY_CCX_LEVELS` (`0-3`): CalculiX levels (`none` skips the CalculiX side);
 //! * `ACCURACY_CCX_TIMEOUT` (1200): seconds per CalculiX level.
+//!
 //! Writes the report as markdown on stdout and to `out/bench/accuracy.md`, the table as CSV to
 //! `out/bench/accuracy.csv`; CalculiX's working files go to `out/bench/calculix/`.
 
@@ -624,9 +626,9 @@ fn main() {
     let mut rows: Vec<Row> = vec![];
     for case in &cases {
         for &level in &levels {
-            eout!(rep, "stickslip {case} L{level} …");
+            eprintln!("stickslip {case} L{level} …");
             let row = run_ours(&repo, &tmp, case, level, &threads, &r);
-            eout!(rep, "  {}", md_row(&row));
+            eprintln!("  {}", md_row(&row));
             rows.push(row);
             write_csv(&csv_path, &rows);
         }
@@ -640,10 +642,10 @@ fn main() {
         ccx_note = "CalculiX side skipped: `ccx` is not on PATH (install it, e.g. `apt-get install -y calculix-ccx`, to compare).".into();
     } else {
         for &level in &ccx_levels {
-            eout!(rep, "calculix vm272_cm L{level} … (this takes minutes)");
+            eprintln!("calculix vm272_cm L{level} … (this takes minutes)");
             match run_ccx(&repo, level, &threads, &ccx_timeout, &r) {
                 Some(row) => {
-                    eout!(rep, "  {}", md_row(&row));
+                    eprintln!("  {}", md_row(&row));
                     rows.push(row);
                     write_csv(&csv_path, &rows);
                 }
@@ -655,7 +657,7 @@ fn main() {
         }
     }
     if !ccx_note.is_empty() {
-        eout!(rep, "{ccx_note}");
+        eprintln!("{ccx_note}");
     }
 
     // ---- the table
