@@ -252,6 +252,11 @@ pub enum Control {
     Force(f64),
     /// Pilot displacement in this direction.
     Displacement(f64),
+    /// `pilot_x` only, with frictional contact: the mean slip over the contact (the mortar-
+    /// weighted mean of the nodes' slip increments, summed over steps, positive in the direction
+    /// the pilot is pushed). The pilot force follows. Unlike force or displacement control it
+    /// traces the softening branch past the peak tangential force, where both turn back.
+    Slip(f64),
 }
 
 /// A distributed load on a curve group.
@@ -519,8 +524,21 @@ impl Case {
                             "there is no `pilot` in this case",
                         ));
                     }
-                    let (Control::Force(v) | Control::Displacement(v)) = c;
+                    let (Control::Force(v) | Control::Displacement(v) | Control::Slip(v)) = c;
                     finite(format!("stages[{i}].{k}"), v)?;
+                    if let Control::Slip(_) = c {
+                        let frictional = self
+                            .contact
+                            .as_ref()
+                            .is_some_and(|ct| ct.friction.is_some());
+                        if k != "pilot_x" || !frictional {
+                            return Err(bad(
+                                format!("stages[{i}].{k}"),
+                                format!("{c:?}"),
+                                "slip control drives `pilot_x` only, and needs a `contact` with `friction`",
+                            ));
+                        }
+                    }
                 }
             }
             if let Some(v) = s.traction_scale {

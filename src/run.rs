@@ -122,6 +122,8 @@ pub struct ContactFigures {
     /// Total contact force on the master side.
     pub fx: f64,
     pub fy: f64,
+    /// Mean slip over the contact (the quantity of slip control; see `State::mean_slip`).
+    pub mean_slip: f64,
 }
 
 /// One converged load step.
@@ -255,6 +257,7 @@ impl Model {
         let drive = control.map(|c| match c {
             Control::Force(f) => PilotDrive::Force(f),
             Control::Displacement(d) => PilotDrive::Displacement(d),
+            Control::Slip(s) => PilotDrive::Slip(s),
         });
         cm.system
             .solve_step(&w0, drive, law, prev, guess, opt, cache)
@@ -303,6 +306,7 @@ impl Model {
         }
         fig.fx = fx;
         fig.fy = fy;
+        fig.mean_slip = st.mean_slip;
         if on.is_empty() {
             return fig;
         }
@@ -387,6 +391,9 @@ pub fn solve_pilot(
                 free.push(c);
             }
             Control::Displacement(d) => u[c] = d,
+            Control::Slip(_) => {
+                return Err("slip control needs frictional contact".into());
+            }
         }
     }
     // S_FF u_F = g_F + r_F − S_FD u_D
@@ -539,7 +546,12 @@ pub fn simulate(
     let mut lost_equilibrium: Option<(f64, f64)> = None;
     const MAX_CUTBACKS: usize = 12;
     'stages: for (si, stage) in case.stages.iter().enumerate() {
-        let start = (pilot, scale, control);
+        let start = (
+            pilot,
+            scale,
+            control,
+            cstate.as_ref().map_or(0.0, |s| s.mean_slip),
+        );
         let target = [stage.pilot_x, stage.pilot_y];
         let nominal = 1.0 / stage.steps as f64;
         let mut alpha = 0.0;
@@ -555,6 +567,7 @@ pub fn simulate(
                 None => start.1,
             };
             let (u0, r0) = ([start.0.ux, start.0.uy], [start.0.fx, start.0.fy]);
+            let m0 = start.3;
             let mut ctl = control;
             for c in 0..2 {
                 ctl[c] = match (target[c], start.2[c]) {
@@ -564,6 +577,8 @@ pub fn simulate(
                     }
                     (None, Control::Force(_)) => Control::Force(r0[c]),
                     (None, Control::Displacement(_)) => Control::Displacement(u0[c]),
+                    (Some(Control::Slip(s)), _) => Control::Slip(m0 + a_new * (s - m0)),
+                    (None, Control::Slip(_)) => Control::Slip(m0),
                 };
             }
             let (u, p, iterations) = if let (Some(prev), Some(opt)) = (&cstate, &copt) {
@@ -642,7 +657,7 @@ pub fn simulate(
                                 pilot.fx,
                                 match ctl[0] {
                                     Control::Force(f) => f,
-                                    Control::Displacement(_) => f64::NAN,
+                                    Control::Displacement(_) | Control::Slip(_) => f64::NAN,
                                 },
                             ));
                         }
@@ -741,6 +756,17 @@ pub fn simulate(
     })
 }
 
+/// How many of the case's nominal load steps the load path has covered at `time` (stage index
+/// plus the fraction of that stage).
+fn nominal_steps_done(case: &Case, time: f64) -> f64 {
+    let mut done = 0.0;
+    for (i, st) in case.stages.iter().enumerate() {
+        let frac = (time - i as f64).clamp(0.0, 1.0);
+        done += frac * st.steps as f64;
+    }
+    done
+}
+
 /// Steps through the stages of a built model, writing output to `out_dir`.
 pub fn run_model(
     case: &Case,
@@ -785,13 +811,19 @@ pub fn run_model(
             ),
             _ => format!("traction scale {:.4}", r.traction_scale),
         };
+        // Progress in nominal steps: cutbacks add steps, so the count is not the position.
+        let done = nominal_steps_done(case, ev.time);
         match &bar {
             Some(b) => {
-                b.set_position(step as u64);
+                b.set_position(done.round() as u64);
                 b.set_message(msg);
             }
             None if level >= LogLevel::Info => {
-                eprintln!("step {step}/{total} (stage {}): {msg}", r.stage)
+                eprintln!(
+                    "step {step} (stage {}, {:.0} % of the load path): {msg}",
+                    r.stage,
+                    100.0 * done / total as f64
+                )
             }
             None => {}
         }
@@ -882,6 +914,7 @@ pub fn run_model(
                 c.fx,
                 c.fy,
                 r.wall_s,
+                c.mean_slip,
             ]
         })
         .collect();
@@ -909,6 +942,7 @@ pub fn run_model(
                 "contact_fx",
                 "contact_fy",
                 "wall_s",
+                "mean_slip",
             ],
             &rows,
         )

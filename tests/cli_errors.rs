@@ -347,3 +347,23 @@ fn an_unheld_pilot_under_force_control_fails_cleanly() {
         "{err}"
     );
 }
+
+#[test]
+fn slip_control_without_friction_or_on_y_is_refused() {
+    // The square case has a pilot but no contact: slip control has nothing to drive.
+    let case = GOOD_CASE.replace(
+        "\"stages\"",
+        "\"pilot\": {\"group\": \"top\"},\n  \"stages\"",
+    );
+    for (name, ctl) in [
+        ("slip-x", "\"pilot_x\": {\"slip\": 0.01},"),
+        ("slip-y", "\"pilot_y\": {\"slip\": 0.01},"),
+    ] {
+        assert_refused(
+            name,
+            &case.replace("\"steps\": 2,", &format!("\"steps\": 2, {ctl}")),
+            &square_msh(),
+            &["stages[0].pilot_", "slip control drives `pilot_x` only"],
+        );
+    }
+}

@@ -110,3 +110,115 @@ fn force_and_displacement_control_find_the_same_peak() {
     }
     assert!(compared > 20);
 }
+
+/// Slip control (`pilot_x: {"slip": …}`) traces the softening branch that force and
+/// displacement control cannot: past the peak both the force and the pilot displacement turn
+/// back while the stick zone keeps shrinking. Checked against the force-controlled run (same
+/// peak, same stick zone at the same Q before it) and against the double Cattaneo–Mindlin
+/// curve Q(c) of the same law (eqs. Qx, W1), an independent closed form, on both branches.
+#[test]
+fn slip_control_traces_the_softening_branch() {
+    use stickslip::analytic::dcm::DoubleCm;
+    let (code, err, force_rows, s) = run(
+        "onset-force-2",
+        json!({"steps": 40, "pilot_x": {"force": 1.2}}),
+    );
+    assert_eq!(code, 5, "{err}");
+    let q_force = s["friction"]["q_max"].as_f64().unwrap();
+    // The load at which force control found no equilibrium (from the status line).
+    let status = s["status"].as_str().unwrap();
+    let q_fail: f64 = status
+        .split("no equilibrium at ")
+        .nth(1)
+        .unwrap()
+        .trim_end_matches(')')
+        .parse()
+        .unwrap();
+    let (code, err, rows, _) = run(
+        "onset-slip",
+        json!({"steps": 109, "pilot_x": {"slip": 0.00272}}),
+    );
+    assert_eq!(code, 0, "{err}");
+    // columns: 4 pilot_ux, 6 pilot_fx (Q), 15 c, 20 mean_slip
+    let tang: Vec<&Vec<f64>> = rows.iter().filter(|r| r[1] == 1.0).collect();
+    let (i_peak, q_peak) = tang
+        .iter()
+        .enumerate()
+        .map(|(i, r)| (i, r[6]))
+        .fold((0, 0.0), |m, (i, q)| if q > m.1 { (i, q) } else { m });
+    println!(
+        "Q_max: force control {q_force:.6} (none at {q_fail:.6}), slip control peak {q_peak:.6} at step {i_peak} of {}",
+        tang.len()
+    );
+    // The mean slip is driven exactly.
+    let last = tang.last().unwrap();
+    assert!((last[20] - 0.00272).abs() < 1e-12, "mean slip {}", last[20]);
+    // Same peak. Force control brackets Q_max to one bisection width (the tangential step
+    // 0.03 halved 12 times: 7.3e-6; Newton fails a little before the limit point, where its
+    // Jacobian becomes singular); slip control samples the curve, ΔQ ≈ 2e-4 per step at the top.
+    let width = 0.03 / 4096.0;
+    assert!(
+        q_peak < q_fail + 2.0 * width,
+        "slip-controlled peak {q_peak} above the load without equilibrium {q_fail}"
+    );
+    assert!(
+        (q_peak - q_force).abs() < 3e-4,
+        "peaks {q_peak} vs {q_force}"
+    );
+    // Past the peak: Q falls and c shrinks over several steps …
+    let after = &tang[i_peak..];
+    assert!(after.len() >= 5, "only {} steps past the peak", after.len());
+    for w in after.windows(2) {
+        assert!(w[1][6] < w[0][6] + 1e-9, "Q rises past the peak: {:?}", w);
+        assert!(w[1][15] <= w[0][15] + 1e-12, "c grows past the peak");
+    }
+    assert!(last[6] < q_peak - 0.005 && last[15] < 0.5 * tang[i_peak][15]);
+    // … and the pilot displacement turns back: displacement control cannot follow (snap-back).
+    let ux_max = tang.iter().map(|r| r[4]).fold(f64::MIN, f64::max);
+    assert!(
+        last[4] < ux_max - 5e-5,
+        "pilot displacement {} vs its maximum {ux_max}",
+        last[4]
+    );
+    // Same stick zone at the same Q as force control before the peak (within h/2, L4).
+    let h = 0.6808 / 51.2 / 2.0;
+    let mut compared = 0;
+    for r in force_rows
+        .iter()
+        .filter(|r| r[1] == 1.0 && r[6] > 0.1 && r[6] < q_peak - 0.01)
+    {
+        // Slip control samples Q coarsely at first (uniform slip steps): c(Q) must lie between
+        // the stick semi-widths of the two slip-controlled steps around Q (c falls with Q).
+        let (q, c) = (r[6], r[15]);
+        let i = tang.iter().position(|d| d[6] >= q).unwrap();
+        let (lo, hi) = (tang[i][15], tang[i - 1][15]);
+        assert!(
+            c >= lo - h - 1e-12 && c <= hi + h + 1e-12,
+            "at Q = {q}: c {c} outside [{lo}, {hi}] of slip control"
+        );
+        compared += 1;
+    }
+    assert!(compared > 20, "{compared}");
+    // Against the double Cattaneo–Mindlin curve of the same law (f_s/f_d = 1.5, Λ = 0.05),
+    // at the FE stick semi-width: within 1.5 % of f_d P where c ≤ 0.6a (the stick edge is
+    // located to ±h/2 and Q(c) is steep there), within 0.3 % on the softening branch.
+    let (dcm, weak) = DoubleCm::normalized(1.5, 0.05).unwrap();
+    let a = s["friction"]["a_hertz"].as_f64().unwrap();
+    let (mut worst, mut worst_soft) = (0.0f64, 0.0f64);
+    for (i, r) in tang.iter().enumerate() {
+        let ca = r[15] / a;
+        if !(0.02..=0.6).contains(&ca) {
+            continue;
+        }
+        let (_, q_dcm, _) = dcm.curve_point(ca, weak).unwrap();
+        // FE: f_d P = 1; the dimensionless closed form has a = R = E* = f_d = 1, P = π/4.
+        let d = (r[6] - q_dcm / (dcm.fd * dcm.hertz.p_load)).abs();
+        worst = worst.max(d);
+        if i > i_peak {
+            worst_soft = worst_soft.max(d);
+        }
+    }
+    println!("|Q_FE − Q_DCM(c_FE)|/(f_d P): ≤ {worst:.4} (c ≤ 0.6a), ≤ {worst_soft:.4} past the peak");
+    assert!(worst < 0.015, "{worst}");
+    assert!(worst_soft < 0.003, "{worst_soft}");
+}

@@ -330,6 +330,13 @@ impl ContactModel {
                 }
             }
         }
+        // Orientation of the mean slip: its response to a pilot force in +x.
+        let slip_orient = if has_pilot {
+            let s: f64 = (0..ns).map(|j| m0.weight[j] * w[(ns + j, 2 * ns)]).sum();
+            if s < 0.0 { -1.0 } else { 1.0 }
+        } else {
+            1.0
+        };
         let system = solver::ContactSystem {
             ns,
             has_pilot,
@@ -340,6 +347,8 @@ impl ContactModel {
             c: e_star,
             eps_unit,
             kg,
+            weight: m0.weight.clone(),
+            slip_orient,
         };
         ContactModel {
             pair,

@@ -71,6 +71,11 @@ impl Status {
 pub enum PilotDrive {
     Force(f64),
     Displacement(f64),
+    /// The x component only: the pilot force is whatever makes the mean slip
+    /// ([`State::mean_slip`]) reach this value. Slip grows monotonically towards gross
+    /// sliding, also on the softening branch past the peak tangential force, where both the
+    /// force and the pilot displacement turn back (indirect displacement control).
+    Slip(f64),
 }
 
 /// The converged contact state after a step (and the committed history).
@@ -92,6 +97,10 @@ pub struct State {
     /// Pilot displacement and force.
     pub pilot_u: [f64; 2],
     pub pilot_f: [f64; 2],
+    /// Mean slip: the sum over steps of the weighted mean of the slip increments `Δv̂` of the
+    /// nodes in contact at the start of each step (weights: mortar weights), signed so that it
+    /// grows when the pilot is pushed in +x. The quantity driven by [`PilotDrive::Slip`].
+    pub mean_slip: f64,
 }
 
 /// One iteration's data for [`ContactSystem::newton_system`].
@@ -146,6 +155,11 @@ pub struct ContactSystem {
     /// Grounding springs of the anchors: the pilot's DOFs, then DOFs of bodies held by contact
     /// alone (driven at zero force).
     pub kg: Vec<f64>,
+    /// Mortar weight of each slave node (its share of the slave face length).
+    pub weight: Vec<f64>,
+    /// +1 or −1: the sign of the slips' response to a pilot force in +x, so that
+    /// [`State::mean_slip`] grows in the direction the pilot is pushed.
+    pub slip_orient: f64,
 }
 
 /// Options of a contact solve.
@@ -221,7 +235,24 @@ impl ContactSystem {
             mu: vec![0.0; ns],
             pilot_u: [0.0; 2],
             pilot_f: [0.0; 2],
+            mean_slip: 0.0,
         }
+    }
+
+    /// The weights `ω_j` of the mean slip for a step from `prev`: normalised mortar weights of
+    /// the nodes in contact, times [`Self::slip_orient`] (all zero with no node in contact).
+    pub fn slip_weights(&self, prev: &State) -> Vec<f64> {
+        let on = |j: usize| prev.status[j] != Status::Open;
+        let total: f64 = (0..self.ns).filter(|&j| on(j)).map(|j| self.weight[j]).sum();
+        (0..self.ns)
+            .map(|j| {
+                if on(j) && total > 0.0 {
+                    self.slip_orient * self.weight[j] / total
+                } else {
+                    0.0
+                }
+            })
+            .collect()
     }
 
     /// Solves one load step from the committed state `prev`, with the condensed load `w0`
@@ -359,6 +390,7 @@ impl ContactSystem {
                     });
                 }
             }
+            self.seed_slip(drive, prev, &mut status, &mut sign);
             solved = true;
             let it_ctx = Iterate {
                 substitute: cache.is_none(),
@@ -577,6 +609,18 @@ impl ContactSystem {
                         wrow(&mut a, r, u, 1.0);
                         b[(r, 0)] = d - w0[u];
                     }
+                    PilotDrive::Slip(target) => {
+                        // Σ ω_j (v̂_j − v̂_j,old) = target − mean slip, v̂ = w0_t + (W μ)_t.
+                        let omega = self.slip_weights(prev);
+                        let mut rhs = target - prev.mean_slip;
+                        for (j, &o) in omega.iter().enumerate() {
+                            if o != 0.0 {
+                                wrow(&mut a, r, ns + j, o);
+                                rhs -= o * (w0[ns + j] - prev.v[j]);
+                            }
+                        }
+                        b[(r, 0)] = rhs;
+                    }
                 }
             }
         }
@@ -629,10 +673,45 @@ impl ContactSystem {
                     match d {
                         PilotDrive::Force(f) => mu[u] - self.kg[k] * y[u] - f,
                         PilotDrive::Displacement(d) => y[u] - d,
+                        PilotDrive::Slip(target) => {
+                            let omega = self.slip_weights(it.prev);
+                            let dm: f64 = (0..ns)
+                                .map(|j| omega[j] * (y[ns + j] - it.prev.v[j]))
+                                .sum();
+                            it.prev.mean_slip + dm - target
+                        }
                     }
                 }
             })
             .collect()
+    }
+
+    /// Under slip control the slip constraint contradicts a contact that sticks everywhere
+    /// (the system is singular): when no node in contact slips, the two outermost nodes in
+    /// contact start slipping in the driven direction, and the iteration finds the slip zones
+    /// from there.
+    fn seed_slip(
+        &self,
+        drive: [PilotDrive; 2],
+        prev: &State,
+        status: &mut [Status],
+        sign: &mut [f64],
+    ) {
+        let PilotDrive::Slip(target) = drive[0] else {
+            return;
+        };
+        let dm = target - prev.mean_slip;
+        if !self.has_pilot || dm == 0.0 || status.contains(&Status::Slip) {
+            return;
+        }
+        let on: Vec<usize> = (0..self.ns).filter(|&j| status[j] != Status::Open).collect();
+        if let (Some(&first), Some(&last)) = (on.first(), on.last()) {
+            for j in [first, last] {
+                status[j] = Status::Slip;
+                // The master's tangential force opposes its slip.
+                sign[j] = -self.slip_orient * dm.signum();
+            }
+        }
     }
 
     fn eps_h(&self, j: usize) -> f64 {
@@ -659,6 +738,11 @@ impl ContactSystem {
         let ns = self.ns;
         let y = self.y(w0, mu);
         let mut st = prev.clone();
+        let omega = self.slip_weights(prev);
+        st.mean_slip = prev.mean_slip
+            + (0..ns)
+                .map(|j| omega[j] * (y[ns + j] - prev.v[j]))
+                .sum::<f64>();
         for j in 0..ns {
             st.f_n[j] = mu[j];
             st.f_t[j] = mu[ns + j];
