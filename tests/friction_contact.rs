@@ -411,3 +411,47 @@ fn newton_jacobian_matches_finite_differences() {
         assert!(worst < 1e-7, "{worst} at {worst_at:?}");
     }
 }
+
+/// Why Fig. 3's stick zone sits 3–4 % below eq. (qx2CM): the double Cattaneo–Mindlin solution
+/// matches the law's fracture energy W but not its shape (paper §5: "the exact form of the
+/// function f(u) cannot be prescribed"). Given the friction law that the solution itself
+/// implies (paper Fig. 1, `f = q/p` against the slip over c ≤ x ≤ b), the FE reproduces it:
+/// c within 2 % (here well within), and the traction within 3 % of f_d p0 everywhere outside
+/// two elements of |x| = c, |x| = b (where the implied law ends with an infinite slope) and the
+/// contact edge — including the transition zone c < |x| < b.
+#[test]
+fn figure_3_with_the_law_implied_by_double_cattaneo_mindlin() {
+    let h = hertz();
+    let dcm = DoubleCm::new(h, 0.15, 0.1).unwrap();
+    let s = dcm.solve_delta(0.9, 1.605e-3).unwrap();
+    // The implied law, sampled densely (clustered at both ends), then f_d beyond x = b.
+    let rows = dcm.implied_law(s.c, s.b, 400);
+    assert!((rows[0][1] - 0.15).abs() < 1e-6, "f(0) = {}", rows[0][1]);
+    let table: Vec<[f64; 2]> = rows
+        .iter()
+        .enumerate()
+        .filter(|(i, r)| *i == 0 || r[0] > rows[i - 1][0] + 1e-15)
+        .map(|(_, r)| *r)
+        .collect();
+    let f = run("fig3_ramp.json", "fig3i", &|v: &mut Value| {
+        v["contact"]["friction"] = json!({"shape": "table", "rows": table});
+    });
+    let (ramp, rmc) = (run("fig3_ramp.json", "fig3i-ramp", &|_| {}), s.c / h.a);
+    let q_ref = |x: f64| dcm.traction(x, s.c, s.b);
+    let elem = h.a / 102.4;
+    let skip = [(s.c, 2.0 * elem), (s.b, 2.0 * elem)];
+    let dq = worst(&f, &q_ref, 0.1 * h.p0, &skip);
+    let dq_ramp = worst(&ramp, &q_ref, 0.1 * h.p0, &skip);
+    println!(
+        "Fig. 3, double C–M c/a = {rmc:.4}: FE with the implied law {:.4} ({:+.2} %), with the ramp {:.4} ({:+.2} %); \
+         max |q − q_2CM|/(f_d p0): implied {dq:.4}, ramp {dq_ramp:.4}",
+        f.c / h.a,
+        100.0 * (f.c / s.c - 1.0),
+        ramp.c / h.a,
+        100.0 * (ramp.c / s.c - 1.0),
+    );
+    assert!((f.c / s.c - 1.0).abs() < 0.02, "c {} vs {}", f.c, s.c);
+    assert!(dq < 0.03, "traction off by {dq} f_d p0");
+    // The ramp's deviation is then a property of the closed form, not of the FE.
+    assert!((f.c / s.c - 1.0).abs() < (ramp.c / s.c - 1.0).abs());
+}

@@ -218,7 +218,9 @@ fn slip_control_traces_the_softening_branch() {
             worst_soft = worst_soft.max(d);
         }
     }
-    println!("|Q_FE − Q_DCM(c_FE)|/(f_d P): ≤ {worst:.4} (c ≤ 0.6a), ≤ {worst_soft:.4} past the peak");
+    println!(
+        "|Q_FE − Q_DCM(c_FE)|/(f_d P): ≤ {worst:.4} (c ≤ 0.6a), ≤ {worst_soft:.4} past the peak"
+    );
     assert!(worst < 0.015, "{worst}");
     assert!(worst_soft < 0.003, "{worst_soft}");
 }
