@@ -2,7 +2,7 @@
 
 Reads the output of `stickslip run CASE --out DIR`:
   DIR/contact_NNNN.csv  x,y,pressure,shear,gap,slip,slip_increment,status,mu,q_over_p
-  DIR/history.csv       step,stage,time,...,a,x_centre,c,b,contact_fx,contact_fy,wall_s
+  DIR/history.csv       step,stage,time,...,a,x_centre,c,b,contact_fx,contact_fy,wall_s,mean_slip
 and calls `stickslip analytic ...` for the closed forms.
 """
 import csv
