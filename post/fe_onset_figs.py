@@ -8,7 +8,8 @@ Writes the cases and sweep files into OUTDIR/runs, runs them with `stickslip run
 `stickslip sweep`, and draws into OUTDIR:
 
   fe_fig4.png  Q_x/(f_d P) vs c/a, JKR curves for several Psi (dotted: unstable branch) with FE
-               points from displacement-controlled runs (ramp laws with Lambda = 0.04, the
+               points from slip-controlled runs, through the peak and down the softening
+               branch that force control cannot follow (ramp laws with Lambda = 0.04, the
                smallest round value whose s0 the finest mesh resolves) and the force-controlled
                Q_max; thin dashed: double C-M for the same laws.
   fe_fig5.png  Psi = 0.1, Lambda = 0.025 and 0.4: FE Q-c points against the double C-M and JKR
@@ -185,22 +186,19 @@ def pick_level(lam, h, lmin):
     return max(h), False
 
 
-def disp_run(runner, name, law, level, q_guess, threads):
-    """Displacement-controlled run through the peak down to gross sliding. The pilot compliance
-    with the contact stuck is 0.031 mm per N/mm, so 0.027 q mm is safely before the peak; the
-    second stage samples finely up to 0.05 q mm (widened if the peak was not passed)."""
-    d_a, d_b = 0.027 * q_guess, 0.05 * q_guess
-    for attempt in range(3):
-        stages = [{"name": "approach", "steps": 30, "pilot_x": {"displacement": round(d_a, 9)}},
-                  {"name": "peak", "steps": 300, "pilot_x": {"displacement": round(d_b, 9)}}]
-        code, err, out = runner.run(name, runner.case(level, stages, law), threads)
+def slip_run(runner, name, law, level, threads):
+    """Slip-controlled run (`pilot_x: {"slip": ...}`) through the peak and down the softening
+    branch. The mean slip when the stick zone vanishes scales with the Cattaneo-Mindlin slip
+    f a^2/R (about 0.16 f_s a^2/R for Fig. 2's law): the run goes to 0.4 f_s a^2/R in 400
+    steps (widened once if the peak was not passed)."""
+    target = 0.4 * law["fs"] * A * A / 4.0
+    for attempt in range(2):
+        stage = {"name": "slip", "steps": 400, "pilot_x": {"slip": round(target, 9)}}
+        code, err, out = runner.run(name, runner.case(level, stage, law), threads)
         h = read_history(out)
-        if code == 0 and h is not None and h["pilot_fx"][-1] < FDP * 1.001 \
-                and np.argmax(h["pilot_fx"]) < len(h["pilot_fx"]) - 1:
+        if code != 0 or h is None or fe_curve(h)["passed"]:
             return code, err, out, h
-        if code != 0:
-            return code, err, out, h
-        d_b *= 1.5
+        target *= 2.0
     return code, "peak not passed", out, h
 
 
@@ -222,15 +220,26 @@ def theory(binary, chi, r):
 
 # ---- FE curve extraction ----------------------------------------------------------------------
 def fe_curve(h):
-    """Tangential-stage states up to the peak: (c/a, Q/f_dP), the peak, and the final state."""
+    """Tangential-stage states (c/a, Q/f_dP) through the peak and down the softening branch,
+    up to the last state with a stick zone before the contact re-sticks or slides as a whole
+    (when the last stick nodes let go, the slip-controlled path is no longer unique: the
+    interior may re-stick while the edges slip; those states are dropped). `i_peak` splits the
+    stable and the softening branch."""
     tang = h["stage"] >= 1
     q = h["pilot_fx"][tang] / FDP
     c = h["c"][tang] / A
     b = h["b"][tang] / A
+    ux = h["pilot_ux"][tang]
+    end = len(q)
+    for k in range(1, len(q)):
+        if c[k] <= 0.0 or c[k] > c[k - 1] + 0.05:
+            end = k
+            break
+    q, c, b, ux = q[:end], c[:end], b[:end], ux[:end]
     i = int(np.argmax(q))
-    return {"c": c[:i + 1], "q": q[:i + 1], "b": b[:i + 1], "q_peak": q[i], "c_peak": c[i],
-            "b_peak": b[i], "d_peak": h["pilot_ux"][tang][i], "q_end": q[-1], "c_end": c[-1],
-            "passed": i < len(q) - 1}
+    return {"c": c, "q": q, "b": b, "ux": ux, "i_peak": i, "q_peak": q[i], "c_peak": c[i],
+            "b_peak": b[i], "d_peak": ux[i], "q_end": q[-1], "c_end": c[-1],
+            "passed": i < len(q) - 1, "d_max": float(ux.max())}
 
 
 def thin(c, q, dc=0.03):
@@ -242,6 +251,28 @@ def thin(c, q, dc=0.03):
     if keep[-1] != len(c) - 1:
         keep.append(len(c) - 1)
     return c[keep], q[keep]
+
+
+def fe_points(ax, cu, color, dc, label=None):
+    """FE (c/a, Q) points: open markers up to the peak, filled past it (softening branch)."""
+    i = cu["i_peak"]
+    cc, qq = thin(cu["c"][:i + 1], cu["q"][:i + 1], dc)
+    ax.plot(cc, qq, "o", ms=4, mfc="none", mew=1.0, color=color, label=label)
+    if i + 1 < len(cu["q"]):
+        cc, qq = thin(cu["c"][i:], cu["q"][i:], dc / 3)
+        ax.plot(cc[1:], qq[1:], "o", ms=4, mew=1.0, color=color)
+
+
+def softening_gap(binary, d, cu):
+    """Largest |Q_FE - Q_DCM(c_FE)| (units f_d P) over the FE points past the peak."""
+    i = cu["i_peak"]
+    if i + 1 >= len(cu["q"]):
+        return None
+    dc = af.run_csv(binary, "dcm-curve", "--lambda", d["lam"], "--fs-over-fd", d["r"],
+                    "--n", 2001)
+    ok = np.isfinite(dc["q_ratio"])
+    qd = np.interp(cu["c"][i + 1:], dc["c_over_a"][ok], dc["q_ratio"][ok])
+    return float(np.max(np.abs(cu["q"][i + 1:] - qd)))
 
 
 def pct(x, ref):
@@ -258,24 +289,21 @@ def fig4(binary, out, d4):
         af.plot_styled(ax, d["c_over_a"], d["q_ratio"], d["stable"], col, rf"$\Psi$={psi:g}")
         if psi in FIG4_PSI:
             d = af.run_csv(binary, "dcm-curve", "--psi", psi, "--lambda", FIG4_LAMBDA, "--n", 401)
-            ok = d["stable"] & (d["branch"] == "dcm")
+            ok = d["branch"] == "dcm"
             ax.plot(d["c_over_a"][ok], d["q_ratio"][ok], "--", color=col, lw=0.8)
     ax.plot([], [], "--", color="0.4", lw=0.8,
-            label=rf"double C-M, $\Lambda$={FIG4_LAMBDA:g} (stable part)")
+            label=rf"double C-M, $\Lambda$={FIG4_LAMBDA:g} (both branches, up to $b=a$)")
     for psi in FIG4_PSI:
         r = d4[psi]
         if r["curve"] is None:
             continue
-        cc, qq = thin(r["curve"]["c"], r["curve"]["q"])
-        ax.plot(cc, qq, "o", ms=4, mfc="none", mew=1.0, color=cmap[psi])
+        fe_points(ax, r["curve"], cmap[psi], dc=0.03)
         if r.get("q_force") is not None:
             ax.plot(r["c_force"], r["q_force"], "D", ms=4.5, color=cmap[psi], mec="k", mew=0.5)
-    ax.plot(0, 1, "kx", ms=7, mew=1.5, clip_on=False, zorder=5)
-    ax.plot([], [], "o", ms=4, mfc="none", color="0.3",
-            label="FE, displacement control (to the peak)")
+    ax.plot([], [], "o", ms=4, mfc="none", color="0.3", label="FE, slip control: stable branch")
+    ax.plot([], [], "o", ms=4, color="0.3", label="FE, slip control: past the peak")
     ax.plot([], [], "D", ms=4.5, color="0.6", mec="k", mew=0.5,
             label=r"FE $Q_{max}$, force control")
-    ax.plot([], [], "kx", ms=7, mew=1.5, label="FE after the peak: gross sliding")
     ax.set_xlim(0, 1)
     ax.set_ylim(0, 2.0)
     ax.set_xlabel("$c/a$")
@@ -300,12 +328,12 @@ def fig5(binary, out, d5):
                        rf"double C-M, $\Lambda$={lam:g}")
         r = d5[lam]
         if r["curve"] is not None:
-            cc, qq = thin(r["curve"]["c"], r["curve"]["q"], dc=0.025)
-            ax.plot(cc, qq, "o", ms=4, mfc="none", mew=1.0, color=col,
-                    label=rf"FE, $\Lambda$={lam:g} ($f_s/f_d$={r['r']:g}, L{r['level']}"
-                    + ("" if r["resolved"] else r", $h>s_0/2$") + ")")
+            fe_points(ax, r["curve"], col, dc=0.025,
+                      label=rf"FE, $\Lambda$={lam:g} ($f_s/f_d$={r['r']:g}, L{r['level']}"
+                      + ("" if r["resolved"] else r", $h>s_0/2$") + ")")
         if r.get("q_force") is not None:
             ax.plot(r["c_force"], r["q_force"], "D", ms=5, color=col, mec="k", mew=0.5)
+    ax.plot([], [], "o", ms=4, color="0.3", label="FE past the peak (slip control)")
     ax.plot([], [], "D", ms=5, color="0.6", mec="k", mew=0.5, label=r"FE $Q_{max}$, force control")
     ax.set_xlim(0, 1)
     ax.set_ylim(0, 1.45)
@@ -401,7 +429,7 @@ def main():
                    "else target/release/stickslip)")
     p.add_argument("--level", type=int, default=4, choices=LEVELS,
                    help="coarsest mesh level to use (default 4); finer where s0 needs it")
-    p.add_argument("--jobs", type=int, default=2, help="displacement runs in parallel")
+    p.add_argument("--jobs", type=int, default=2, help="slip-controlled runs in parallel")
     p.add_argument("--reuse", action="store_true", help="keep unchanged, finished runs")
     a = p.parse_args()
     binary = a.bin or os.environ.get("STICKSLIP_BIN") or os.path.join(
@@ -426,27 +454,27 @@ def main():
             for L in LEVELS}
     fig6_rows = [law_item(chi=chi, r=r, **mk) for chi in FIG6_CHI for r in FIG6_RATIOS]
 
-    # ---- displacement control (Figs. 4, 5), runs in parallel --------------------------------
+    # ---- slip control (Figs. 4, 5), runs in parallel ------------------------------------------
     disp = {}
     for d in list(d4.values()) + list(d5.values()):
         disp.setdefault((law_key(d["r"], d["lam"]), d["level"]), d)
 
     def job(item):
         (k, L), d = item
-        return item[0], disp_run(runner, f"disp_{k}_L{L}", d["law"], L, d["theory"]["q_jkr"],
+        return item[0], slip_run(runner, f"slip_{k}_L{L}", d["law"], L,
                                  threads=1 if a.jobs > 1 else 2)
 
     with cf.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
         for key, (code, err, out, hist) in ex.map(job, list(disp.items())):
             res = dict(code=code, err=err, curve=fe_curve(hist) if hist is not None else None)
-            runner.log.append((f"disp_{key[0]}_L{key[1]}", code, err))
+            runner.log.append((f"slip_{key[0]}_L{key[1]}", code, err))
             sp = os.path.join(out, "summary.json")
             if os.path.isfile(sp):
                 res["resolved"] = json.load(open(sp))["friction"]["resolved"]
             for d in list(d4.values()) + list(d5.values()):
                 if (law_key(d["r"], d["lam"]), d["level"]) == key:
                     d.update(res)
-    print(f"displacement-controlled runs done ({time.time() - t0:.0f} s)")
+    print(f"slip-controlled runs done ({time.time() - t0:.0f} s)")
 
     # ---- force control: one sweep per level -----------------------------------------------------
     force_items = (list(d4.values()) + list(d5.values()) + list(supp.values()) +
@@ -501,8 +529,9 @@ def main():
     fig6(binary, a.outdir, fig6_rows, steps)
 
     # ---- tables -------------------------------------------------------------------------------
-    head = ["Ψ", "f_s/f_d", "Λ", "χ", "mesh", "h/s0", "Q_max FE force", "Q_max FE disp.",
-            "JKR", "DCM", "FE−JKR %", "FE−DCM %", "c/a FE disp. peak", "c_max/a JKR",
+    head = ["Ψ", "f_s/f_d", "Λ", "χ", "mesh", "h/s0", "Q_max FE force", "Q_max FE slip",
+            "JKR", "DCM", "FE−JKR %", "FE−DCM %", "c/a FE slip peak", "c/a FE lowest",
+            "max ΔQ to DCM(c) past the peak", "c_max/a JKR",
             "c_max/a DCM"]
 
     def h_s0(d):
@@ -519,7 +548,10 @@ def main():
                          fmt(t["q_jkr"]), fmt(t["q_dcm"]),
                          fmtp(pct(qf, t["q_jkr"]) if qf else None),
                          fmtp(pct(qf, t["q_dcm"]) if qf else None),
-                         fmt(cu["c_peak"], 3) if cu else "—", fmt(t["c_jkr"], 3),
+                         fmt(cu["c_peak"], 3) if cu else "—",
+                         fmt(cu["c_end"], 3) if cu else "—",
+                         fmt(softening_gap(binary, d, cu), 4) if cu else "—",
+                         fmt(t["c_jkr"], 3),
                          fmt(t["c_dcm"], 3)])
         return rows
 
@@ -555,7 +587,9 @@ def main():
                                f"{p2:.2f} (L4→L5)")
     ts = md_table(heads, rowss)
     legend = ("Q_max in units of f_d P. 'FE force': force control past the peak (bisection "
-              "bracket, 12 halvings); 'FE disp.': largest sampled Q under displacement control; "
+              "bracket, 12 halvings); 'FE slip': largest sampled Q under slip control, which "
+              "continues past the peak down to 'c/a FE lowest'; the gap to the double C-M "
+              "curve Q(c) of the same law is measured there, in f_d P; "
               "deviations use the force-controlled value. h/s0 with s0 = 2Λa/π at the centre; "
               "✗ = h > s0/2 (not resolved).")
     out_md = [legend, "",
