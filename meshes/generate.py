@@ -46,6 +46,11 @@ JOBS.append(("block_hertz.msh", "block_hertz.geo", {}, {"Mesh.Binary": 1},
              {"h": A / 40, "note": "a/40 on top for abs(x) <= 1.2a, ~a/20 on x = 0 to depth 3.5a; nodes at x = -a, 0, a on top"}))
 JOBS.append(("patch_curved.msh", "patch_curved.geo", {}, {"Mesh.Binary": 0},
              {"h": 0.34, "note": "unit square, unstructured"}))
+# Material-pair cases (docs/material_pairs.md): cylindrical pad R = 25 mm on a flat.
+JOBS.append(("pad_flat.msh", "pad_flat.geo", {"h_c": 0.001, "x_f": 0.16}, {"Mesh.Binary": 1},
+             {"h": 0.001, "xs": 0.16, "note": "pad R = 25 mm on a flat; h_c = 1 um for abs(x) <= 0.16 mm"}))
+JOBS.append(("pad_flat_lead.msh", "pad_flat.geo", {"h_c": 0.00025, "x_f": 0.016}, {"Mesh.Binary": 1},
+             {"h": 0.00025, "xs": 0.016, "note": "as pad_flat, h_c = 0.25 um for abs(x) <= 0.016 mm (lead pair)"}))
 
 
 def make(out, geo, params, opts):
@@ -73,16 +78,21 @@ EXPECTED_GROUPS = {
     "lame": {(2, "body"), (1, "inner"), (1, "outer"), (1, "sym_x"), (1, "sym_y")},
     "block_hertz": {(2, "block"), (1, "top"), (1, "bottom"), (1, "left"), (1, "right")},
     "patch_curved": {(2, "body"), (1, "left"), (1, "right"), (1, "bottom"), (1, "top")},
+    "pad_flat": {(2, "lower_body"), (2, "upper_body"), (1, "bottom"), (1, "top"),
+                 (1, "lower_arc"), (1, "upper_arc")},
 }
 # circles whose boundary-line nodes must lie on the circle: group -> (cx, cy, r)
 CIRCLES = {
     "vm272": {"lower_arc": (0.0, 0.0, R), "upper_arc": (0.0, 2 * R, R)},
     "lame": {"inner": (0.0, 0.0, 1.0), "outer": (0.0, 0.0, 2.0)},
+    "pad_flat": {"upper_arc": (0.0, 35.0, 25.0)},
 }
+# straight contact faces whose nodes must lie on a line y = const: group -> y
+FLATS = {"pad_flat": {"lower_arc": 10.0}}
 
 
 def family(out):
-    for f in ("vm272", "lame", "block_hertz", "patch_curved"):
+    for f in ("vm272", "lame", "block_hertz", "patch_curved", "pad_flat"):
         if out.startswith(f):
             return f
     raise ValueError(out)
@@ -159,8 +169,8 @@ def check(out, desc):
     if neg:
         errors.append(f"{neg} clockwise triangles")
 
-    # bodies share no node (vm272)
-    if fam == "vm272":
+    # bodies share no node (vm272, pad_flat)
+    if fam in ("vm272", "pad_flat"):
         lo = {v for r in conn["lower_body"] for v in r}
         up = {v for r in conn["upper_body"] for v in r}
         if lo & up:
@@ -174,8 +184,12 @@ def check(out, desc):
                 dev = abs(math.hypot(xy[v][0] - cx, xy[v][1] - cy) - rad)
                 if k < 2 or not straight:
                     circ_dev = max(circ_dev, dev)
+    for gname, y in FLATS.get(fam, {}).items():
+        for r in conn[gname]:
+            for v in r:
+                circ_dev = max(circ_dev, abs(xy[v][1] - y))
     if circ_dev > 1e-9:
-        errors.append(f"arc node off circle by {circ_dev:.3e}")
+        errors.append(f"arc node off circle (or flat face off its line) by {circ_dev:.3e}")
     if straight and curved_edges:
         errors.append(f"{curved_edges} curved edges in straight-edged mesh")
 
@@ -193,11 +207,12 @@ def check(out, desc):
 
     # edge lengths along the arcs for |x| <= 1.5 a
     arc_h = {}
-    if fam == "vm272":
+    if fam in ("vm272", "pad_flat"):
+        xs = desc.get("xs", XS)
         for gname in ("lower_arc", "upper_arc"):
             ls = [math.hypot(xy[r[0]][0] - xy[r[1]][0], xy[r[0]][1] - xy[r[1]][1])
                   for r in conn[gname]
-                  if abs(xy[r[0]][0]) <= XS + 1e-9 and abs(xy[r[1]][0]) <= XS + 1e-9]
+                  if abs(xy[r[0]][0]) <= xs + 1e-9 and abs(xy[r[1]][0]) <= xs + 1e-9]
             arc_h[gname] = (min(ls), max(ls), len(ls))
     gmsh.finalize()
 
@@ -298,6 +313,14 @@ VM272 (`vm272.geo`): R = 8 mm, a = {A} mm; each arc split at |x| = 1.5a and at t
 point (0, 8) (one copy per body). Size h = min(1, h_c + 0.05 d), d = distance to the
 central arcs (|x| <= 1.5a), capped at R/8. Ladder h_c = a/(3.2*2^L), so L5 has h_c <= a/100. "arc edges" = number of 3-node line
 elements of `lower_arc` with |x| <= 1.5a and min/max chord length there (both arcs).
+
+Pad on flat (`pad_flat.geo`, the material-pair cases of docs/material_pairs.md): a cylindrical
+pad of radius R = 25 mm (`upper_body`, lower half of the disc centred at (0, 35), flat face
+`top` at y = 35) on a flat specimen 50 mm x 10 mm (`lower_body`, `bottom` at y = 0); the
+contact faces are `upper_arc` and the straight top face of the flat, named `lower_arc` like
+the VM272 meshes so the cases look alike. Size h = min(2.5, h_c + 0.1 d), d = distance to the
+central pieces |x| <= x_f of the two contact faces. For these files "arc edges" counts the
+edges with |x| <= x_f (0.16 mm for `pad_flat.msh`, 0.016 mm for `pad_flat_lead.msh`).
 
 | file | h_c or h (mm) | nodes | triangles | arc edges / chord range | size | format | notes |
 |---|---|---|---|---|---|---|---|
