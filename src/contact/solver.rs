@@ -243,7 +243,10 @@ impl ContactSystem {
     /// the nodes in contact, times [`Self::slip_orient`] (all zero with no node in contact).
     pub fn slip_weights(&self, prev: &State) -> Vec<f64> {
         let on = |j: usize| prev.status[j] != Status::Open;
-        let total: f64 = (0..self.ns).filter(|&j| on(j)).map(|j| self.weight[j]).sum();
+        let total: f64 = (0..self.ns)
+            .filter(|&j| on(j))
+            .map(|j| self.weight[j])
+            .sum();
         (0..self.ns)
             .map(|j| {
                 if on(j) && total > 0.0 {
@@ -675,9 +678,8 @@ impl ContactSystem {
                         PilotDrive::Displacement(d) => y[u] - d,
                         PilotDrive::Slip(target) => {
                             let omega = self.slip_weights(it.prev);
-                            let dm: f64 = (0..ns)
-                                .map(|j| omega[j] * (y[ns + j] - it.prev.v[j]))
-                                .sum();
+                            let dm: f64 =
+                                (0..ns).map(|j| omega[j] * (y[ns + j] - it.prev.v[j])).sum();
                             it.prev.mean_slip + dm - target
                         }
                     }
@@ -704,7 +706,9 @@ impl ContactSystem {
         if !self.has_pilot || dm == 0.0 || status.contains(&Status::Slip) {
             return;
         }
-        let on: Vec<usize> = (0..self.ns).filter(|&j| status[j] != Status::Open).collect();
+        let on: Vec<usize> = (0..self.ns)
+            .filter(|&j| status[j] != Status::Open)
+            .collect();
         if let (Some(&first), Some(&last)) = (on.first(), on.last()) {
             for j in [first, last] {
                 status[j] = Status::Slip;
