@@ -127,32 +127,46 @@ fn main() -> ExitCode {
             let mut out = std::io::stdout().lock();
             match stickslip::analytic::cli::run(&args, &mut out) {
                 Ok(()) => ExitCode::SUCCESS,
+                // A closed pipe (`… | head`): quiet success, as for `mesh-info`.
+                Err(stickslip::analytic::cli::CliError::Io(e))
+                    if e.kind() == std::io::ErrorKind::BrokenPipe =>
+                {
+                    ExitCode::SUCCESS
+                }
                 Err(e) => {
                     eprintln!("error: {e}");
                     ExitCode::from(2)
                 }
             }
         }
-        Cmd::Schema => {
-            println!(
-                "{}",
-                serde_json::to_string_pretty(&stickslip::case::schema()).expect("serialisable")
-            );
-            ExitCode::SUCCESS
-        }
+        Cmd::Schema => print_stdout(
+            &serde_json::to_string_pretty(&stickslip::case::schema()).expect("serialisable"),
+        ),
         Cmd::MeshInfo { mesh } => match stickslip::mesh::gmsh::read(&mesh) {
             Ok(m) => {
                 let info = stickslip::mesh::info::info(&m);
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&info).expect("serialisable")
-                );
-                ExitCode::SUCCESS
+                print_stdout(&serde_json::to_string_pretty(&info).expect("serialisable"))
             }
             Err(e) => {
                 eprintln!("error: {e}");
                 ExitCode::from(2)
             }
         },
+    }
+}
+
+/// Prints `text` and a newline to standard output. A closed pipe (`stickslip mesh-info … | head`)
+/// ends the program quietly with success, as command-line tools do; other write errors are
+/// reported.
+fn print_stdout(text: &str) -> ExitCode {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match writeln!(out, "{text}").and_then(|()| out.flush()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: cannot write to standard output: {e}");
+            ExitCode::from(4)
+        }
     }
 }

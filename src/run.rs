@@ -646,6 +646,9 @@ pub fn simulate(
                         (None, has_pilot.then_some(p), it)
                     }
                     Err(e) => {
+                        // Failed attempts count in the solve time too (they can dominate a run
+                        // that brackets Q_max).
+                        t_solve += t.elapsed().as_secs_f64();
                         // A force-controlled tangential load that no equilibrium carries: the
                         // cutbacks bisect between the last converged load and this one; a failure
                         // that survives all of them is reported as the loss of equilibrium.
@@ -797,6 +800,57 @@ pub fn run_model(
         );
         b
     });
+    // Writes the VTK files of one converged step (and rewrites the .pvd series).
+    let mut write_step = |step: usize,
+                          time: f64,
+                          scale: f64,
+                          u: Option<&Vec<f64>>,
+                          contact: Option<&State>|
+     -> Result<(), RunError> {
+        let t = Instant::now();
+        let name = format!("{stem}_{step:04}.vtu");
+        let u = match (u, contact) {
+            (Some(u), _) => u.clone(),
+            (None, Some(st)) => model.contact_displacement(scale, st),
+            (None, None) => unreachable!("a step has a solution or a contact state"),
+        };
+        let bytes = bodies_vtu(&model, &u, case).map_err(|e| RunError::Write {
+            path: name.clone(),
+            source: std::io::Error::other(e.to_string()),
+        })?;
+        wr(&out_dir.join(&name), &bytes)?;
+        pvd.push(PvdEntry {
+            time,
+            part: 0,
+            file: name,
+        });
+        if let Some(st) = contact {
+            let cname = format!("{stem}_contact_{step:04}.vtu");
+            let bytes = contact_vtu(&model, st).map_err(|e| RunError::Write {
+                path: cname.clone(),
+                source: std::io::Error::other(e.to_string()),
+            })?;
+            wr(&out_dir.join(&cname), &bytes)?;
+            pvd.push(PvdEntry {
+                time,
+                part: 1,
+                file: cname,
+            });
+            wr(
+                &out_dir.join(format!("contact_{step:04}.csv")),
+                contact_csv(&model, st).as_bytes(),
+            )?;
+        }
+        wr(
+            &out_dir.join(format!("{stem}.pvd")),
+            output::pvd(&pvd).as_bytes(),
+        )?;
+        t_write += t.elapsed().as_secs_f64();
+        Ok(())
+    };
+    // The last converged step not yet written (`output.every` > 1).
+    #[allow(clippy::type_complexity)]
+    let mut unwritten: Option<(usize, f64, f64, Option<Vec<f64>>, Option<State>)> = None;
     let sim = simulate(&model, case, law.as_ref(), level, &mut |ev: &StepEvent| {
         let step = ev.step;
         let r = ev.record;
@@ -827,51 +881,30 @@ pub fn run_model(
             }
             None => {}
         }
-        let step = ev.step;
-        if !(case.output.vtu && (step % case.output.every == 0 || ev.last)) {
+        if !case.output.vtu {
             return Ok(());
         }
-        let t = Instant::now();
-        let name = format!("{stem}_{step:04}.vtu");
-        let u = match (ev.u, ev.contact) {
-            (Some(u), _) => u.clone(),
-            (None, Some(st)) => model.contact_displacement(ev.scale, st),
-            (None, None) => unreachable!("a step has a solution or a contact state"),
-        };
-        let bytes = bodies_vtu(&model, &u, case).map_err(|e| RunError::Write {
-            path: name.clone(),
-            source: std::io::Error::other(e.to_string()),
-        })?;
-        wr(&out_dir.join(&name), &bytes)?;
-        pvd.push(PvdEntry {
-            time: ev.time,
-            part: 0,
-            file: name,
-        });
-        if let Some(st) = ev.contact {
-            let cname = format!("{stem}_contact_{step:04}.vtu");
-            let bytes = contact_vtu(&model, st).map_err(|e| RunError::Write {
-                path: cname.clone(),
-                source: std::io::Error::other(e.to_string()),
-            })?;
-            wr(&out_dir.join(&cname), &bytes)?;
-            pvd.push(PvdEntry {
-                time: ev.time,
-                part: 1,
-                file: cname,
-            });
-            wr(
-                &out_dir.join(format!("contact_{step:04}.csv")),
-                contact_csv(&model, st).as_bytes(),
-            )?;
+        if ev.step % case.output.every == 0 || ev.last {
+            unwritten = None;
+            write_step(ev.step, ev.time, ev.scale, ev.u, ev.contact)
+        } else {
+            // Kept so that a run that stops early still writes its last converged state.
+            unwritten = Some((
+                ev.step,
+                ev.time,
+                ev.scale,
+                ev.u.cloned(),
+                ev.contact.cloned(),
+            ));
+            Ok(())
         }
-        wr(
-            &out_dir.join(format!("{stem}.pvd")),
-            output::pvd(&pvd).as_bytes(),
-        )?;
-        t_write += t.elapsed().as_secs_f64();
-        Ok(())
     })?;
+    if let Some((step, time, scale, u, st)) = unwritten.take() {
+        if sim.failure.is_some() {
+            write_step(step, time, scale, u.as_ref(), st.as_ref())?;
+        }
+    }
+    drop(write_step);
     let Simulation {
         records,
         failure,

@@ -367,3 +367,25 @@ fn slip_control_without_friction_or_on_y_is_refused() {
         );
     }
 }
+
+#[test]
+fn a_closed_output_pipe_ends_quietly() {
+    // `stickslip mesh-info … | head -1`: the reader goes away before the JSON is written.
+    for args in [
+        vec!["mesh-info", "meshes/vm272_L5.msh"],
+        vec!["analytic", "jkr-curve", "--psi", "0.1", "--n", "200000"],
+    ] {
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+            .args(&args)
+            .current_dir(common::repo())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {err}");
+    }
+}
