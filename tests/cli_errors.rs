@@ -4,29 +4,27 @@
 mod common;
 use common::*;
 use std::path::PathBuf;
-use std::process::Command;
-
-fn stickslip(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
 
 /// A unit square, 2×2 cells, as MSH 4.1 text with groups body, bottom, right, top, left.
 fn square_msh() -> String {
     let (nodes, tris, sides) = structured(2, 2, 0.0, 1.0, 0.0, 1.0, 0.0);
-    let [b, r, t, l] = sides;
-    msh41(
-        &nodes,
-        &[("body", tris)],
-        &[("bottom", b), ("right", r), ("top", t), ("left", l)],
-    )
+    msh41_sides(&nodes, &[("body", tris)], sides)
+}
+
+/// Two unit squares side by side, [0,1]×[0,1] and [1,2]×[0,1], 1 cell each, sharing the nodes
+/// of their common edge: nodes, the triangles of each square and the four sides.
+#[allow(clippy::type_complexity)]
+fn two_squares() -> (
+    Vec<[f64; 2]>,
+    Vec<[usize; 6]>,
+    Vec<[usize; 6]>,
+    [Vec<[usize; 3]>; 4],
+) {
+    let (nodes, tris, sides) = structured(2, 1, 0.0, 2.0, 0.0, 1.0, 0.0);
+    let (left, right): (Vec<_>, Vec<_>) = tris.into_iter().partition(|t| {
+        nodes[t[0]][0] < 1.0 - 1e-9 && nodes[t[1]][0] < 1.0 + 1e-9 && nodes[t[2]][0] < 1.0 + 1e-9
+    });
+    (nodes, left, right, sides)
 }
 
 const GOOD_CASE: &str = r#"{
@@ -41,17 +39,10 @@ const GOOD_CASE: &str = r#"{
 /// (exit code, stderr, whether the output directory exists).
 fn run_case(name: &str, case: &str, mesh: &str) -> (i32, String, bool) {
     let dir = tempdir(name);
-    std::fs::write(dir.join("case.json"), case).unwrap();
     std::fs::write(dir.join("mesh.msh"), mesh).unwrap();
-    let out = dir.join("out");
-    let (code, _, err) = stickslip(&[
-        "run",
-        dir.join("case.json").to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
-    (code, err, out.exists())
+    let r = run_case_in(&dir, "case.json", case, &["--quiet"]);
+    let wrote = r.wrote_output();
+    (r.code, r.stderr, wrote)
 }
 
 fn assert_refused(name: &str, case: &str, mesh: &str, needles: &[&str]) {
@@ -72,19 +63,10 @@ fn good_case_runs_and_writes_everything() {
     assert_eq!(code, 0, "{err}");
     assert!(wrote);
     let dir = tempdir("good2");
-    std::fs::write(dir.join("case.json"), GOOD_CASE).unwrap();
     std::fs::write(dir.join("mesh.msh"), square_msh()).unwrap();
-    let out = dir.join("o");
-    let (code, _, _) = stickslip(&[
-        "run",
-        dir.join("case.json").to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-        "--threads",
-        "1",
-    ]);
-    assert_eq!(code, 0);
+    let r = run_case_in(&dir, "case.json", GOOD_CASE, &["--quiet", "--threads", "1"]);
+    assert_eq!(r.code, 0);
+    let out = &r.out;
     for f in [
         "case.pvd",
         "case_0001.vtu",
@@ -95,7 +77,7 @@ fn good_case_runs_and_writes_everything() {
         assert!(out.join(f).exists(), "{f} missing");
     }
     // No temporary files are left behind.
-    let leftovers: Vec<PathBuf> = std::fs::read_dir(&out)
+    let leftovers: Vec<PathBuf> = std::fs::read_dir(out)
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.to_string_lossy().contains(".tmp"))
@@ -117,48 +99,38 @@ fn unknown_key_is_named_with_its_line() {
 #[test]
 fn out_of_range_values_name_the_key() {
     let msh = square_msh();
-    assert_refused(
-        "nu",
-        &GOOD_CASE.replace("\"nu\": 0.3", "\"nu\": 0.5"),
-        &msh,
-        &["bodies[0].nu", "0.5"],
-    );
-    assert_refused(
-        "E",
-        &GOOD_CASE.replace("\"E\": 1.0", "\"E\": -2.0"),
-        &msh,
-        &["bodies[0].E", "-2"],
-    );
-    assert_refused(
-        "steps",
-        &GOOD_CASE.replace("\"steps\": 2", "\"steps\": 0"),
-        &msh,
-        &["stages[0].steps"],
-    );
-    assert_refused(
-        "huge",
-        &GOOD_CASE.replace("\"ty\": -1.0", "\"ty\": -1e400"),
-        &msh,
-        &["case.json", "line 5"],
-    );
-    assert_refused(
-        "hertz-a",
-        &GOOD_CASE.replace(
+    // (name, text in GOOD_CASE, replacement, needles)
+    let cases: [(&str, &str, &str, &[&str]); 6] = [
+        ("nu", "\"nu\": 0.3", "\"nu\": 0.5", &["bodies[0].nu", "0.5"]),
+        ("E", "\"E\": 1.0", "\"E\": -2.0", &["bodies[0].E", "-2"]),
+        (
+            "steps",
+            "\"steps\": 2",
+            "\"steps\": 0",
+            &["stages[0].steps"],
+        ),
+        (
+            "huge",
+            "\"ty\": -1.0",
+            "\"ty\": -1e400",
+            &["case.json", "line 5"],
+        ),
+        (
+            "hertz-a",
             "\"kind\": \"uniform\", \"ty\": -1.0",
             "\"kind\": \"hertz\", \"p0\": 1.0, \"a\": 0.0",
+            &["tractions[0].a"],
         ),
-        &msh,
-        &["tractions[0].a"],
-    );
-    assert_refused(
-        "pilot-missing",
-        &GOOD_CASE.replace(
+        (
+            "pilot-missing",
             "\"steps\": 2,",
             "\"steps\": 2, \"pilot_x\": {\"force\": 1.0},",
+            &["stages[0].pilot_x", "no `pilot`"],
         ),
-        &msh,
-        &["stages[0].pilot_x", "no `pilot`"],
-    );
+    ];
+    for (name, from, to, needles) in cases {
+        assert_refused(name, &GOOD_CASE.replace(from, to), &msh, needles);
+    }
 }
 
 #[test]
@@ -230,10 +202,7 @@ fn corrupt_and_truncated_meshes_are_refused() {
 #[test]
 fn bodies_sharing_nodes_are_refused() {
     // Two squares side by side that share their common edge's nodes.
-    let (nodes, tris, _) = structured(2, 1, 0.0, 2.0, 0.0, 1.0, 0.0);
-    let (left, right): (Vec<_>, Vec<_>) = tris.into_iter().partition(|t| {
-        nodes[t[0]][0] < 1.0 - 1e-9 && nodes[t[1]][0] < 1.0 + 1e-9 && nodes[t[2]][0] < 1.0 + 1e-9
-    });
+    let (nodes, left, right, _) = two_squares();
     let msh = msh41(&nodes, &[("a", left), ("b", right)], &[]);
     let case = r#"{"mesh": "mesh.msh", "bodies": [{"group": "a", "E": 1, "nu": 0.3}, {"group": "b", "E": 1, "nu": 0.3}], "stages": [{"steps": 1}]}"#;
     assert_refused("shared", case, &msh, &["bodies `a` and `b` share node"]);
@@ -245,12 +214,7 @@ fn badly_curved_elements_are_named_and_clockwise_ones_are_reoriented() {
     // Reverse the first triangle (clockwise in the file): it is reoriented and runs.
     let mut cw = tris.clone();
     cw[0] = stickslip::shapes::tri6::REVERSE.map(|k| cw[0][k]);
-    let [b, r, t, l] = sides.clone();
-    let msh = msh41(
-        &nodes,
-        &[("body", cw)],
-        &[("bottom", b), ("right", r), ("top", t), ("left", l)],
-    );
+    let msh = msh41_sides(&nodes, &[("body", cw)], sides.clone());
     let (code, err, _) = run_case("cw", GOOD_CASE, &msh);
     assert_eq!(code, 0, "{err}");
     let dir = tempdir("cw-info");
@@ -261,12 +225,7 @@ fn badly_curved_elements_are_named_and_clockwise_ones_are_reoriented() {
     // Push a mid-edge node of an interior edge far across its element: the Jacobian turns negative.
     let m = tris[0][4];
     nodes[m] = [nodes[m][0] - 0.45, nodes[m][1] + 0.45];
-    let [b, r, t, l] = sides;
-    let msh = msh41(
-        &nodes,
-        &[("body", tris)],
-        &[("bottom", b), ("right", r), ("top", t), ("left", l)],
-    );
+    let msh = msh41_sides(&nodes, &[("body", tris)], sides);
     assert_refused(
         "jacobian",
         GOOD_CASE,
@@ -314,16 +273,8 @@ fn support_on_the_pilot_face_is_refused() {
 
 #[test]
 fn load_on_a_body_not_in_use_is_refused() {
-    let (nodes, tris, sides) = structured(2, 1, 0.0, 2.0, 0.0, 1.0, 0.0);
-    let (left, right): (Vec<_>, Vec<_>) = tris.into_iter().partition(|t| {
-        nodes[t[0]][0] < 1.0 - 1e-9 && nodes[t[1]][0] < 1.0 + 1e-9 && nodes[t[2]][0] < 1.0 + 1e-9
-    });
-    let [b, r, t, l] = sides;
-    let msh = msh41(
-        &nodes,
-        &[("a", left), ("b", right)],
-        &[("bottom", b), ("right", r), ("top", t), ("left", l)],
-    );
+    let (nodes, left, right, sides) = two_squares();
+    let msh = msh41_sides(&nodes, &[("a", left), ("b", right)], sides);
     let case = r#"{"mesh": "mesh.msh", "bodies": [{"group": "a", "E": 1, "nu": 0.3}],
       "supports": [{"group": "left", "ux": 0, "uy": 0}],
       "tractions": [{"group": "right", "kind": "uniform", "tx": 1}], "stages": [{"steps": 1, "traction_scale": 1}]}"#;

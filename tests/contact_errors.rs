@@ -3,36 +3,16 @@
 //! than s0/2.
 
 mod common;
-use common::{repo, tempdir};
+use common::{run_case_in, shipped_case_on, tempdir};
 use serde_json::{Value, json};
 
 fn run_edited(name: &str, edit: &dyn Fn(&mut Value)) -> (i32, String, bool) {
-    let mut v: Value =
-        serde_json::from_str(&std::fs::read_to_string(repo().join("cases/hertz.json")).unwrap())
-            .unwrap();
-    v["mesh"] = json!(repo().join("meshes/vm272_L0.msh").to_str().unwrap());
+    let mut v = shipped_case_on("hertz.json", "vm272_L0.msh");
     edit(&mut v);
-    let dir = tempdir(name);
-    std::fs::write(
-        dir.join("case.json"),
-        serde_json::to_string_pretty(&v).unwrap(),
-    )
-    .unwrap();
-    let out = dir.join("out");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args([
-            "run",
-            dir.join("case.json").to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stderr).into(),
-        out.exists(),
-    )
+    let text = serde_json::to_string_pretty(&v).unwrap();
+    let r = run_case_in(&tempdir(name), "case.json", &text, &[]);
+    let wrote = r.wrote_output();
+    (r.code, r.stderr, wrote)
 }
 
 fn refused(name: &str, edit: &dyn Fn(&mut Value), needles: &[&str]) {

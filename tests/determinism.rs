@@ -9,30 +9,21 @@
 
 mod common;
 use common::*;
-use serde_json::{Value, json};
+use serde_json::json;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn run(dir: &Path, case: &Path, threads: usize) -> PathBuf {
     let out = dir.join(format!("out{threads}"));
-    let o = Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args([
-            "run",
-            case.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--threads",
-            &threads.to_string(),
-            "--quiet",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "--threads {threads}: exit {:?}: {}",
-        o.status.code(),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let (code, _, err) = stickslip(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--threads",
+        &threads.to_string(),
+        "--quiet",
+    ]);
+    assert!(code == 0, "--threads {threads}: exit {code}: {err}");
     out
 }
 
@@ -107,10 +98,7 @@ fn vtu_array_at(text: &[u8], pos: usize) -> String {
 #[test]
 fn one_and_two_threads_give_identical_files() {
     let dir = tempdir("determinism");
-    let mut v: Value =
-        serde_json::from_str(&std::fs::read_to_string(repo().join("cases/vm272_cm.json")).unwrap())
-            .unwrap();
-    v["mesh"] = json!(repo().join("meshes/vm272_L2.msh").to_str().unwrap());
+    let v = shipped_case_on("vm272_cm.json", "vm272_L2.msh");
     let case = dir.join("vm272_cm.json");
     std::fs::write(&case, serde_json::to_string_pretty(&v).unwrap()).unwrap();
 

@@ -9,7 +9,7 @@
 //! The shipped cases are run as they are, or with the mesh or step count changed.
 
 mod common;
-use common::{repo, tempdir};
+use common::{mesh_path, repo, run_case_in, shipped_case, shipped_case_on, tempdir};
 use serde_json::{Value, json};
 use stickslip::analytic::cattaneo::CattaneoMindlin;
 use stickslip::analytic::dcm::DoubleCm;
@@ -26,59 +26,21 @@ struct Face {
 
 /// Runs a case (the shipped file with `edit` applied) and reads its last step.
 fn run(case: &str, name: &str, edit: &dyn Fn(&mut Value)) -> Face {
-    let mut v: Value =
-        serde_json::from_str(&std::fs::read_to_string(repo().join("cases").join(case)).unwrap())
-            .unwrap();
-    v["mesh"] = json!(
-        repo()
-            .join("meshes")
-            .join(v["mesh"].as_str().unwrap().trim_start_matches("../meshes/"))
-            .to_str()
-            .unwrap()
-    );
+    let mut v = shipped_case(case);
     v["output"] = json!({"vtu": true, "every": 100000});
     edit(&mut v);
-    let dir = tempdir(name);
-    let path = dir.join(case);
-    std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
-    let out = dir.join("out");
-    let st = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args([
-            "run",
-            path.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ])
-        .status()
-        .unwrap();
-    assert!(st.success(), "{case} failed");
-    let hist = std::fs::read_to_string(out.join("history.csv")).unwrap();
-    let header: Vec<&str> = hist.lines().next().unwrap().split(',').collect();
-    let last: Vec<f64> = hist
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|x| x.parse().unwrap())
-        .collect();
-    let col = |n: &str| last[header.iter().position(|h| *h == n).unwrap()];
-    let step = last[0] as usize;
-    let csv = std::fs::read_to_string(out.join(format!("contact_{step:04}.csv"))).unwrap();
-    let mut f = Face {
-        x: vec![],
-        p: vec![],
-        q: vec![],
-        c: col("c"),
-        b: col("b"),
-    };
-    for l in csv.lines().skip(1) {
-        let r: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
-        f.x.push(r[0]);
-        f.p.push(r[2]);
-        f.q.push(r[3]);
+    let text = serde_json::to_string(&v).unwrap();
+    let r = run_case_in(&tempdir(name), case, &text, &["--quiet"]);
+    r.assert_ok(case);
+    let h = r.history();
+    let csv = r.last_contact();
+    Face {
+        x: csv.rows.iter().map(|r| r[0]).collect(),
+        p: csv.rows.iter().map(|r| r[2]).collect(),
+        q: csv.rows.iter().map(|r| r[3]).collect(),
+        c: h.last("c"),
+        b: h.last("b"),
     }
-    f
 }
 
 fn hertz() -> Hertz {
@@ -86,14 +48,7 @@ fn hertz() -> Hertz {
 }
 
 fn with_mesh(level: usize) -> impl Fn(&mut Value) {
-    move |v: &mut Value| {
-        v["mesh"] = json!(
-            repo()
-                .join(format!("meshes/vm272_L{level}.msh"))
-                .to_str()
-                .unwrap()
-        )
-    }
+    move |v: &mut Value| v["mesh"] = mesh_path(&format!("vm272_L{level}.msh"))
 }
 
 /// Largest |q − q_ref|/scale over |x| ≤ a, skipping |x| within `skip` of each listed boundary
@@ -285,17 +240,14 @@ fn figure_2_is_converged_in_the_step_count() {
 #[test]
 fn newton_jacobian_matches_finite_differences() {
     use stickslip::case::{Case, Control};
-    use stickslip::contact::solver::{Iterate, Method, Options, Status};
+    use stickslip::contact::solver::{Iterate, Method, Options, State, Status};
     use stickslip::friction::FrictionLaw;
     for law in [
         FrictionLaw::ramp(0.15, 0.1, 2e-3).unwrap(),
         FrictionLaw::exponential(0.15, 0.1, 2e-3).unwrap(),
     ] {
-        let mut v: Value =
-            serde_json::from_str(&std::fs::read_to_string(repo().join("cases/fig2.json")).unwrap())
-                .unwrap();
-        v["mesh"] = json!(repo().join("meshes/vm272_L1.msh").to_str().unwrap());
-        let case: Case = serde_json::from_value(v).unwrap();
+        let case: Case =
+            serde_json::from_value(shipped_case_on("fig2.json", "vm272_L1.msh")).unwrap();
         let model = stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap();
         let cm = model.contact.as_ref().unwrap();
         let opt = Options {
@@ -305,35 +257,28 @@ fn newton_jacobian_matches_finite_differences() {
             tolerance: 1e-12,
             verbose: false,
         };
-        let mut st = cm.system.initial_state();
-        for q in [0.0, 0.3, 0.6] {
-            st = model
+        // The state after a force-controlled step to Q = q from `prev` (normal force 10).
+        let step = |q: f64, prev: &State| {
+            model
                 .solve_contact_step(
                     0.0,
                     [Control::Force(q), Control::Force(-10.0)],
-                    &st,
+                    prev,
                     None,
                     &opt,
                     Some(&law),
                     None,
                 )
                 .unwrap()
-                .state;
+                .state
+        };
+        let mut st = cm.system.initial_state();
+        for q in [0.0, 0.3, 0.6] {
+            st = step(q, &st);
         }
         // An iterate of the next step: the committed forces, sets and slip signs of a solve at
         // a higher load, so that transition nodes have Δv ≠ 0 and μ' ≠ 0.
-        let next = model
-            .solve_contact_step(
-                0.0,
-                [Control::Force(0.7), Control::Force(-10.0)],
-                &st,
-                None,
-                &opt,
-                Some(&law),
-                None,
-            )
-            .unwrap()
-            .state;
+        let next = step(0.7, &st);
         let ns = cm.system.ns;
         let mut mu: Vec<f64> = next
             .f_n

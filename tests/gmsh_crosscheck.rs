@@ -5,57 +5,25 @@
 //! within 1 %, and the Cattaneo–Mindlin stick zone within 1.5 % of c/a = 0.729.
 
 mod common;
-use common::{repo, tempdir};
-use serde_json::{Value, json};
+use common::{run_case_in, shipped_case_on, tempdir};
+use serde_json::json;
 
 const A: f64 = 0.680_778;
 const P0: f64 = 9.351_351;
 
 fn run(case: &str, name: &str, slave_upper: bool) -> (Vec<(f64, f64)>, f64, f64) {
-    let mut v: Value =
-        serde_json::from_str(&std::fs::read_to_string(repo().join("cases").join(case)).unwrap())
-            .unwrap();
-    v["mesh"] = json!(repo().join("meshes/vm272_alt.msh").to_str().unwrap());
+    let mut v = shipped_case_on(case, "vm272_alt.msh");
     v["output"] = json!({"vtu": true, "every": 100000});
     if slave_upper {
         v["contact"]["slave"] = json!("upper_arc");
         v["contact"]["master"] = json!("lower_arc");
     }
-    let dir = tempdir(name);
-    std::fs::write(dir.join("c.json"), serde_json::to_string(&v).unwrap()).unwrap();
-    let out = dir.join("out");
-    let st = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args([
-            "run",
-            dir.join("c.json").to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ])
-        .status()
-        .unwrap();
-    assert!(st.success(), "{case} on the alternative mesh failed");
-    let hist = std::fs::read_to_string(out.join("history.csv")).unwrap();
-    let header: Vec<&str> = hist.lines().next().unwrap().split(',').collect();
-    let last: Vec<f64> = hist
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|x| x.parse().unwrap())
-        .collect();
-    let col = |n: &str| last[header.iter().position(|h| *h == n).unwrap()];
-    let step = last[0] as usize;
-    let csv = std::fs::read_to_string(out.join(format!("contact_{step:04}.csv"))).unwrap();
-    let p = csv
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let r: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
-            (r[0], r[2])
-        })
-        .collect();
-    (p, col("a"), col("c"))
+    let text = serde_json::to_string(&v).unwrap();
+    let r = run_case_in(&tempdir(name), "c.json", &text, &["--quiet"]);
+    r.assert_ok(&format!("{case} on the alternative mesh"));
+    let h = r.history();
+    let p = r.last_contact().rows.iter().map(|r| (r[0], r[2])).collect();
+    (p, h.last("a"), h.last("c"))
 }
 
 #[test]

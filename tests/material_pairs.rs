@@ -10,42 +10,17 @@
 //!   0.5 % of f_s (the double Cattaneo–Mindlin value with b = a).
 
 mod common;
-use common::{repo, tempdir};
+use common::{run_case, shipped_case};
 use serde_json::{Value, json};
 
 /// Runs `cases/NAME.json` (mesh path made absolute, no VTK output) and returns the exit status,
 /// stderr and summary.json.
 fn run(name: &str) -> (i32, String, Value) {
-    let mut v: Value = serde_json::from_str(
-        &std::fs::read_to_string(repo().join(format!("cases/{name}.json"))).unwrap(),
-    )
-    .unwrap();
-    let mesh = v["mesh"]
-        .as_str()
-        .unwrap()
-        .trim_start_matches("../")
-        .to_string();
-    v["mesh"] = json!(repo().join(mesh).to_str().unwrap());
+    let mut v = shipped_case(&format!("{name}.json"));
     v["output"] = json!({"vtu": false});
-    let dir = tempdir(name);
-    std::fs::write(dir.join("case.json"), serde_json::to_string(&v).unwrap()).unwrap();
-    let out = dir.join("out");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args([
-            "run",
-            dir.join("case.json").to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    let summary =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stderr).into(),
-        summary,
-    )
+    let r = run_case(name, &v, &[]);
+    let summary = r.summary();
+    (r.code, r.stderr, summary)
 }
 
 fn num(v: &Value, key: &str) -> f64 {

@@ -7,42 +7,16 @@
 //!   stick zone at the same Q.
 
 mod common;
-use common::{repo, tempdir};
+use common::{run_case, shipped_case_on};
 use serde_json::{Value, json};
 
 fn run(name: &str, stage: Value) -> (i32, String, Vec<Vec<f64>>, Value) {
-    let mut v: Value =
-        serde_json::from_str(&std::fs::read_to_string(repo().join("cases/fig2.json")).unwrap())
-            .unwrap();
-    v["mesh"] = json!(repo().join("meshes/vm272_L4.msh").to_str().unwrap());
+    let mut v = shipped_case_on("fig2.json", "vm272_L4.msh");
     v["output"] = json!({"vtu": false});
     v["stages"][1] = stage;
-    let dir = tempdir(name);
-    std::fs::write(dir.join("case.json"), serde_json::to_string(&v).unwrap()).unwrap();
-    let out = dir.join("out");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args([
-            "run",
-            dir.join("case.json").to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    let hist = std::fs::read_to_string(out.join("history.csv")).unwrap();
-    let rows = hist
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
-        .collect();
-    let summary =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stderr).into(),
-        rows,
-        summary,
-    )
+    let r = run_case(name, &v, &[]);
+    let (rows, summary) = (r.history().rows, r.summary());
+    (r.code, r.stderr, rows, summary)
 }
 
 #[test]

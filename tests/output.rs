@@ -2,23 +2,20 @@
 //! values are those of the solve (displacement of the pilot face, stress at the support).
 
 mod common;
-use common::repo;
+use common::{repo, stickslip};
 use vtkio::model::{Attribute, DataSet, IOBuffer};
 
 #[test]
 fn vtu_holds_every_documented_array_with_finite_values() {
     let dir = common::tempdir("vtu");
-    let status = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args([
-            "run",
-            repo().join("cases/arc_hertz.json").to_str().unwrap(),
-            "--out",
-            dir.to_str().unwrap(),
-            "--quiet",
-        ])
-        .status()
-        .unwrap();
-    assert!(status.success());
+    let (code, _, err) = stickslip(&[
+        "run",
+        repo().join("cases/arc_hertz.json").to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(code == 0, "{err}");
     let pvd = std::fs::read_to_string(dir.join("arc_hertz.pvd")).unwrap();
     assert!(pvd.contains("file=\"arc_hertz_0001.vtu\""));
     let vtk = vtkio::Vtk::import(dir.join("arc_hertz_0001.vtu")).unwrap();

@@ -10,14 +10,9 @@ use stickslip::model::Model;
 
 fn block_model(dir: &std::path::Path) -> Model {
     let (nodes, tris, sides) = structured(6, 4, -1.5, 1.5, 0.0, 2.0, 0.2);
-    let [b, r, t, l] = sides;
     std::fs::write(
         dir.join("m.msh"),
-        msh41(
-            &nodes,
-            &[("body", tris)],
-            &[("bottom", b), ("right", r), ("top", t), ("left", l)],
-        ),
+        msh41_sides(&nodes, &[("body", tris)], sides),
     )
     .unwrap();
     let json = r#"{"mesh": "m.msh", "bodies": [{"group": "body", "E": 200, "nu": 0.3}],

@@ -4,15 +4,13 @@
 //! Fig. 6 regime.
 
 mod common;
-use common::{repo, tempdir};
+use common::{shipped_case_on, stickslip, tempdir};
 use serde_json::{Value, json};
+use std::path::Path;
 
 #[test]
 fn sweep_reports_the_apparent_friction_of_each_law() {
-    let mut v: Value =
-        serde_json::from_str(&std::fs::read_to_string(repo().join("cases/fig2.json")).unwrap())
-            .unwrap();
-    v["mesh"] = json!(repo().join("meshes/vm272_L3.msh").to_str().unwrap());
+    let mut v = shipped_case_on("fig2.json", "vm272_L3.msh");
     v["stages"][1] = json!({"steps": 30, "pilot_x": {"force": 3.0}});
     let dir = tempdir("sweep");
     std::fs::write(dir.join("case.json"), serde_json::to_string(&v).unwrap()).unwrap();
@@ -23,18 +21,20 @@ fn sweep_reports_the_apparent_friction_of_each_law() {
     )
     .unwrap();
     let out = dir.join("out");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args([
+    let sweep = |laws: &str, out: &Path, extra: &[&str]| {
+        let (case, laws) = (dir.join("case.json"), dir.join(laws));
+        let mut args = vec![
             "sweep",
-            dir.join("case.json").to_str().unwrap(),
-            dir.join("sweep.json").to_str().unwrap(),
+            case.to_str().unwrap(),
+            laws.to_str().unwrap(),
             "--out",
             out.to_str().unwrap(),
-            "--quiet",
-        ])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        ];
+        args.extend_from_slice(extra);
+        stickslip(&args)
+    };
+    let (code, _, err) = sweep("sweep.json", &out, &["--quiet"]);
+    assert!(code == 0, "{err}");
     let table: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
     let rows = table["rows"].as_array().unwrap();
@@ -64,17 +64,8 @@ fn sweep_reports_the_apparent_friction_of_each_law() {
         r#"{"friction": [{"shape": "ramp", "fs": 0.1, "fd": 0.2, "delta": 1e-3}]}"#,
     )
     .unwrap();
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args([
-            "sweep",
-            dir.join("case.json").to_str().unwrap(),
-            dir.join("bad.json").to_str().unwrap(),
-            "--out",
-            dir.join("o2").to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("bad.json"));
+    let (code, _, err) = sweep("bad.json", &dir.join("o2"), &[]);
+    assert_eq!(code, 2);
+    assert!(err.contains("bad.json"));
     assert!(!dir.join("o2").exists());
 }

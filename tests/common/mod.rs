@@ -1,8 +1,10 @@
 //! Helpers shared by the integration tests: small meshes written as MSH 4.1 text, a plain
-//! linear solve with per-node Dirichlet values, and error norms.
+//! linear solve with per-node Dirichlet values, error norms, and runs of the `stickslip`
+//! binary on a case with its outputs read back.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
 use stickslip::assembly::{self, UpperCsc};
 use stickslip::condense::Condensed;
 use stickslip::dofs::{DofMap, SupportSpec};
@@ -22,6 +24,186 @@ pub fn tempdir(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
+}
+
+/// Runs the `stickslip` binary with `args`; returns (exit status, -1 without one; stdout;
+/// stderr).
+pub fn stickslip(args: &[&str]) -> (i32, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+/// The path of `meshes/NAME` as a JSON string, for a case's `"mesh"`.
+pub fn mesh_path(name: &str) -> Value {
+    json!(repo().join("meshes").join(name).to_str().unwrap())
+}
+
+/// `cases/FILE` as JSON, its mesh path (relative to `cases/`) made absolute.
+pub fn shipped_case(file: &str) -> Value {
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(repo().join("cases").join(file)).unwrap())
+            .unwrap();
+    let mesh = v["mesh"].as_str().unwrap().trim_start_matches("../");
+    v["mesh"] = json!(repo().join(mesh).to_str().unwrap());
+    v
+}
+
+/// `cases/FILE` as JSON with the mesh `meshes/MESH` (absolute path).
+pub fn shipped_case_on(file: &str, mesh: &str) -> Value {
+    let mut v = shipped_case(file);
+    v["mesh"] = mesh_path(mesh);
+    v
+}
+
+/// One `stickslip run`: exit status (-1 without one), stderr and the output directory.
+pub struct CaseRun {
+    pub code: i32,
+    pub stderr: String,
+    pub out: PathBuf,
+}
+
+/// Writes `text` as `dir/file` and runs `stickslip run dir/file --out dir/out` followed by
+/// `extra` arguments.
+pub fn run_case_in(dir: &Path, file: &str, text: &str, extra: &[&str]) -> CaseRun {
+    let path = dir.join(file);
+    std::fs::write(&path, text).unwrap();
+    let out = dir.join("out");
+    let mut args = vec![
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let (code, _, stderr) = stickslip(&args);
+    CaseRun { code, stderr, out }
+}
+
+/// Runs the case `v` (written as compact JSON to `case.json` in a fresh temporary directory
+/// `name`) with `extra` arguments.
+pub fn run_case(name: &str, v: &Value, extra: &[&str]) -> CaseRun {
+    run_case_in(
+        &tempdir(name),
+        "case.json",
+        &serde_json::to_string(v).unwrap(),
+        extra,
+    )
+}
+
+/// A numeric CSV file: its header and rows.
+pub struct Table {
+    pub header: Vec<String>,
+    pub rows: Vec<Vec<f64>>,
+}
+
+impl Table {
+    pub fn read(path: &Path) -> Table {
+        let text = std::fs::read_to_string(path).unwrap();
+        let mut lines = text.lines();
+        let header = lines
+            .next()
+            .unwrap()
+            .split(',')
+            .map(str::to_string)
+            .collect();
+        let rows = lines
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect();
+        Table { header, rows }
+    }
+
+    /// The index of the column `name`.
+    pub fn col(&self, name: &str) -> usize {
+        self.header.iter().position(|h| h == name).unwrap()
+    }
+
+    /// The value of column `name` in the last row.
+    pub fn last(&self, name: &str) -> f64 {
+        self.rows.last().unwrap()[self.col(name)]
+    }
+}
+
+impl CaseRun {
+    /// Asserts exit status 0, naming `what` and the stderr otherwise.
+    pub fn assert_ok(&self, what: &str) -> &Self {
+        assert_eq!(self.code, 0, "{what} failed: {}", self.stderr);
+        self
+    }
+
+    /// `history.csv`.
+    pub fn history(&self) -> Table {
+        Table::read(&self.out.join("history.csv"))
+    }
+
+    /// `summary.json`.
+    pub fn summary(&self) -> Value {
+        serde_json::from_str(&std::fs::read_to_string(self.out.join("summary.json")).unwrap())
+            .unwrap()
+    }
+
+    /// `contact_NNNN.csv` of step `step`.
+    pub fn contact(&self, step: usize) -> Table {
+        Table::read(&self.out.join(format!("contact_{step:04}.csv")))
+    }
+
+    /// The contact CSV of the last step in `history.csv`.
+    pub fn last_contact(&self) -> Table {
+        self.contact(self.history().rows.last().unwrap()[0] as usize)
+    }
+
+    /// Whether the output directory exists.
+    pub fn wrote_output(&self) -> bool {
+        self.out.exists()
+    }
+}
+
+/// MSH 4.1 text of the bodies `surfaces` with the four sides of [`structured`] as the curve
+/// groups bottom, right, top, left.
+pub fn msh41_sides(
+    nodes: &[[f64; 2]],
+    surfaces: &[(&str, Vec<[usize; 6]>)],
+    sides: [Vec<[usize; 3]>; 4],
+) -> String {
+    let [b, r, t, l] = sides;
+    msh41(
+        nodes,
+        surfaces,
+        &[("bottom", b), ("right", r), ("top", t), ("left", l)],
+    )
+}
+
+/// Two flat blocks with non-matching meshes: lower [0,2]×[0,1] with `lower` = (nx, ny) cells,
+/// upper [0,2]×[y0, y0+1] with `upper` cells, interior vertices moved by `distort`; groups
+/// lower, upper, bottom, lower_top, lower_left, upper_bottom, top, upper_left.
+pub fn two_blocks(lower: [usize; 2], upper: [usize; 2], y0: f64, distort: f64) -> String {
+    let (n1, t1, s1) = structured(lower[0], lower[1], 0.0, 2.0, 0.0, 1.0, distort);
+    let (n2, t2, s2) = structured(upper[0], upper[1], 0.0, 2.0, y0, y0 + 1.0, distort);
+    let off = n1.len();
+    let mut nodes = n1;
+    nodes.extend(n2);
+    let shift = |v: &Vec<[usize; 3]>| v.iter().map(|e| e.map(|k| k + off)).collect::<Vec<_>>();
+    let t2: Vec<[usize; 6]> = t2.iter().map(|t| t.map(|k| k + off)).collect();
+    let [b1, _, top1, l1] = s1;
+    let [b2, _, top2, l2] = &s2;
+    msh41(
+        &nodes,
+        &[("lower", t1), ("upper", t2)],
+        &[
+            ("bottom", b1),
+            ("lower_top", top1),
+            ("lower_left", l1),
+            ("upper_bottom", shift(b2)),
+            ("top", shift(top2)),
+            ("upper_left", shift(l2)),
+        ],
+    )
 }
 
 /// Writes an ASCII MSH 4.1 file: `surfaces` are (name, 6-node triangles), `curves` are
