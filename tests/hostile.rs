@@ -696,28 +696,7 @@ fn run_with_timeout(dir: &Path, args: &[String], timeout: Duration) -> Outcome {
 /// Two flat blocks: lower [0,2]×[0,1], upper [0,2]×[y0, y0+1], non-matching meshes, with groups
 /// lower, upper, bottom, lower_left, lower_top, upper_bottom, upper_left, top.
 fn blocks(y0: f64) -> Vec<u8> {
-    let (n1, t1, s1) = structured(4, 2, 0.0, 2.0, 0.0, 1.0, 0.0);
-    let (n2, t2, s2) = structured(5, 2, 0.0, 2.0, y0, y0 + 1.0, 0.0);
-    let off = n1.len();
-    let mut nodes = n1;
-    nodes.extend(n2);
-    let shift = |v: &Vec<[usize; 3]>| v.iter().map(|e| e.map(|k| k + off)).collect::<Vec<_>>();
-    let t2: Vec<[usize; 6]> = t2.iter().map(|t| t.map(|k| k + off)).collect();
-    let [b1, _, top1, l1] = s1;
-    let [b2, _, top2, l2] = &s2;
-    msh41(
-        &nodes,
-        &[("lower", t1), ("upper", t2)],
-        &[
-            ("bottom", b1),
-            ("lower_top", top1),
-            ("lower_left", l1),
-            ("upper_bottom", shift(b2)),
-            ("top", shift(top2)),
-            ("upper_left", shift(l2)),
-        ],
-    )
-    .into_bytes()
+    two_blocks([4, 2], [5, 2], y0, 0.0).into_bytes()
 }
 
 /// The blocks pressed together through a rigid pilot on the top face.
@@ -736,13 +715,14 @@ fn blocks_case(fy: f64, friction: Option<Value>) -> Value {
     v
 }
 
+/// `cases/FILE` with its mesh read from `mesh.msh` next to the case.
+fn local_case(file: &str) -> Value {
+    edited(shipped_case(file), |v| v["mesh"] = json!("mesh.msh"))
+}
+
 /// `cases/hertz.json` on the coarsest VM272 mesh (copied next to the case as `mesh.msh`).
 fn hertz_case() -> Value {
-    let mut v: Value =
-        serde_json::from_str(&std::fs::read_to_string(repo().join("cases/hertz.json")).unwrap())
-            .unwrap();
-    v["mesh"] = json!("mesh.msh");
-    v
+    local_case("hertz.json")
 }
 
 /// VM272 L0 rewritten as ASCII MSH 4.1 with the upper body moved down by `dy`.
@@ -752,29 +732,15 @@ fn overlapping_vm272(dy: f64) -> Vec<u8> {
     for n in m.group_nodes(m.group("upper_body").unwrap()) {
         nodes[n][1] -= dy;
     }
-    let surf = |name: &str| -> (&str, Vec<[usize; 6]>) {
-        let g = m.group(name).unwrap();
+    let elements = |name: &str| m.group(name).unwrap().elements.iter();
+    let surf = |name: &'static str| -> (&str, Vec<[usize; 6]>) {
         (
-            m.groups
-                .iter()
-                .find(|x| x.name == name)
-                .unwrap()
-                .name
-                .as_str(),
-            g.elements.iter().map(|&e| m.triangles[e].nodes).collect(),
+            name,
+            elements(name).map(|&e| m.triangles[e].nodes).collect(),
         )
     };
-    let curve = |name: &str| -> (&str, Vec<[usize; 3]>) {
-        let g = m.group(name).unwrap();
-        (
-            m.groups
-                .iter()
-                .find(|x| x.name == name)
-                .unwrap()
-                .name
-                .as_str(),
-            g.elements.iter().map(|&l| m.lines[l].nodes).collect(),
-        )
+    let curve = |name: &'static str| -> (&str, Vec<[usize; 3]>) {
+        (name, elements(name).map(|&l| m.lines[l].nodes).collect())
     };
     msh41(
         &nodes,
@@ -802,26 +768,57 @@ fn edited(mut v: Value, f: impl FnOnce(&mut Value)) -> Value {
     v
 }
 
+/// The arguments of a CLI case by default: run `case.json`.
+const RUN: &[&str] = &["run", "case.json", "--out", "out", "--quiet"];
+
+/// A CLI case that runs `case.json` ([`RUN`]).
+fn cli(
+    name: &'static str,
+    input: &'static str,
+    files: Vec<(&'static str, Vec<u8>)>,
+    expect: Expect,
+) -> CliCase {
+    CliCase {
+        name,
+        input,
+        files,
+        args: RUN.iter().map(|s| s.to_string()).collect(),
+        expect,
+    }
+}
+
+impl CliCase {
+    /// The same case with other arguments.
+    fn args(mut self, args: &[&str]) -> CliCase {
+        self.args = args.iter().map(|s| s.to_string()).collect();
+        self
+    }
+}
+
 /// The hostile CLI inputs, one per row of `docs/hostile_inputs.md`.
 fn cli_cases() -> Vec<CliCase> {
-    let run = |extra: &[&str]| -> Vec<String> {
-        let mut a: Vec<String> = ["run", "case.json", "--out", "out", "--quiet"]
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
-        a.extend(extra.iter().map(|s| s.to_string()));
-        a
-    };
+    use Expect::{Completes, Refused};
     let mesh = l0();
     let half = mesh[..mesh.len() / 2].to_vec();
     let hertz = js(&hertz_case());
+    let hertz_text = String::from_utf8(hertz.clone()).unwrap();
+    // `case.json` and the L0 mesh; the hertz case edited by `edit` on L0; the flat blocks.
+    let on_l0 = |case: Vec<u8>| vec![("case.json", case), ("mesh.msh", mesh.clone())];
+    let hertz_edit = |edit: fn(&mut Value)| on_l0(js(&edited(hertz_case(), edit)));
+    let on_blocks = |case: Value, y0: f64| vec![("case.json", js(&case)), ("mesh.msh", blocks(y0))];
     let mut corrupt = mesh.clone();
     let p = find(&corrupt, b"$Elements").unwrap() + 10;
     for b in &mut corrupt[p..p + 64] {
         *b = 0xff;
     }
-    let mut ascii_nan =
-        String::from_utf8(std::fs::read(repo().join("meshes/patch_curved.msh")).unwrap()).unwrap();
+    let patch = std::fs::read_to_string(repo().join("meshes/patch_curved.msh")).unwrap();
+    let patch_case = js(&json!({
+        "mesh": "mesh.msh",
+        "bodies": [{"group": "body", "E": 1.0, "nu": 0.3}],
+        "supports": [{"group": "bottom", "ux": 0.0, "uy": 0.0}],
+        "stages": [{"steps": 1}]
+    }));
+    let mut ascii_nan = patch.clone();
     {
         // Replace the coordinates of the first node with NaN: the fifth line from `$Nodes`
         // ($Nodes, section header, block header, first tag, first coordinates).
@@ -837,24 +834,14 @@ fn cli_cases() -> Vec<CliCase> {
     let zero_edge = {
         let (nodes, tris, [mut b, r, t, l]) = structured(2, 2, 0.0, 1.0, 0.0, 1.0, 0.0);
         b.push([b[0][0], b[0][0], b[0][0]]);
-        msh41(
-            &nodes,
-            &[("body", tris)],
-            &[("bottom", b), ("right", r), ("top", t), ("left", l)],
-        )
-        .into_bytes()
+        msh41_sides(&nodes, &[("body", tris)], [b, r, t, l]).into_bytes()
     };
     // A triangle with two coincident vertices (zero-length edge inside the body).
     let zero_tri_edge = {
-        let (mut nodes, tris, [b, r, t, l]) = structured(2, 2, 0.0, 1.0, 0.0, 1.0, 0.0);
+        let (mut nodes, tris, sides) = structured(2, 2, 0.0, 1.0, 0.0, 1.0, 0.0);
         let t0 = tris[0];
         nodes[t0[1]] = nodes[t0[0]];
-        msh41(
-            &nodes,
-            &[("body", tris)],
-            &[("bottom", b), ("right", r), ("top", t), ("left", l)],
-        )
-        .into_bytes()
+        msh41_sides(&nodes, &[("body", tris)], sides).into_bytes()
     };
     let square_case = js(&json!({
         "mesh": "mesh.msh",
@@ -863,394 +850,222 @@ fn cli_cases() -> Vec<CliCase> {
         "tractions": [{"group": "top", "kind": "uniform", "ty": -1.0}],
         "stages": [{"steps": 1, "traction_scale": 1.0}]
     }));
-    let hv = hertz_case;
+    let mut cm_zero = local_case("vm272_cm.json");
+    cm_zero["stages"][0]["pilot_y"] = json!({"force": 0.0});
+    cm_zero["stages"][1]["pilot_x"] = json!({"force": 0.0});
+    cm_zero["stages"][1]["steps"] = json!(2);
     vec![
-        CliCase {
-            name: "truncated binary mesh",
-            input: "vm272_L0.msh cut at half its length",
-            files: vec![("case.json", hertz.clone()), ("mesh.msh", half)],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["mesh.msh"]),
-        },
-        CliCase {
-            name: "corrupt binary mesh",
-            input: "64 bytes of 0xFF written into the $Elements section of vm272_L0.msh",
-            files: vec![("case.json", hertz.clone()), ("mesh.msh", corrupt)],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["mesh.msh"]),
-        },
-        CliCase {
-            name: "empty mesh file",
-            input: "0-byte mesh.msh",
-            files: vec![("case.json", hertz.clone()), ("mesh.msh", vec![])],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["mesh.msh", "$MeshFormat"]),
-        },
-        CliCase {
-            name: "mesh path is a directory",
-            input: "`\"mesh\": \".\"`",
-            files: vec![("case.json", js(&edited(hv(), |v| v["mesh"] = json!("."))))],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["cannot read"]),
-        },
-        CliCase {
-            name: "NaN node coordinate",
-            input: "patch_curved.msh with the first node at (nan, nan)",
-            files: vec![
-                (
-                    "case.json",
-                    js(&json!({
-                        "mesh": "mesh.msh",
-                        "bodies": [{"group": "body", "E": 1.0, "nu": 0.3}],
-                        "supports": [{"group": "bottom", "ux": 0.0, "uy": 0.0}],
-                        "stages": [{"steps": 1}]
-                    })),
+        cli(
+            "truncated binary mesh",
+            "vm272_L0.msh cut at half its length",
+            vec![("case.json", hertz.clone()), ("mesh.msh", half)],
+            Refused(2, &["mesh.msh"]),
+        ),
+        cli(
+            "corrupt binary mesh",
+            "64 bytes of 0xFF written into the $Elements section of vm272_L0.msh",
+            vec![("case.json", hertz.clone()), ("mesh.msh", corrupt)],
+            Refused(2, &["mesh.msh"]),
+        ),
+        cli(
+            "empty mesh file",
+            "0-byte mesh.msh",
+            vec![("case.json", hertz.clone()), ("mesh.msh", vec![])],
+            Refused(2, &["mesh.msh", "$MeshFormat"]),
+        ),
+        cli(
+            "mesh path is a directory",
+            "`\"mesh\": \".\"`",
+            vec![("case.json", js(&edited(hertz_case(), |v| v["mesh"] = json!("."))))],
+            Refused(2, &["cannot read"]),
+        ),
+        cli(
+            "NaN node coordinate",
+            "patch_curved.msh with the first node at (nan, nan)",
+            vec![("case.json", patch_case.clone()), ("mesh.msh", ascii_nan.into_bytes())],
+            Refused(2, &["mesh.msh"]),
+        ),
+        cli(
+            "zero-length boundary edge",
+            "unit square; an extra line in `bottom` whose three nodes coincide",
+            vec![("case.json", square_case.clone()), ("mesh.msh", zero_edge)],
+            Refused(2, &["zero length", "bottom"]),
+        ),
+        cli(
+            "zero-length triangle edge",
+            "unit square; two vertices of the first triangle coincide",
+            vec![("case.json", square_case), ("mesh.msh", zero_tri_edge)],
+            Refused(2, &["element 9", "degenerate"]),
+        ),
+        cli(
+            "number out of range (1e400)",
+            "`\"E\": 1e400` (JSON has no NaN; 1e400 overflows f64)",
+            on_l0(hertz_text.replacen("200.0", "1e400", 1).into_bytes()),
+            Refused(2, &["case.json", "line"]),
+        ),
+        cli(
+            "NaN literal",
+            "`\"nu\": NaN`",
+            on_l0(hertz_text.replacen("0.3", "NaN", 1).into_bytes()),
+            Refused(2, &["case.json", "line"]),
+        ),
+        cli(
+            "string where a number goes",
+            "`\"E\": \"200\"`",
+            hertz_edit(|v| v["bodies"][0]["E"] = json!("200")),
+            Refused(2, &["case.json", "invalid type"]),
+        ),
+        cli(
+            "negative step count",
+            "`\"steps\": -1`",
+            hertz_edit(|v| v["stages"][0]["steps"] = json!(-1)),
+            Refused(2, &["case.json"]),
+        ),
+        cli(
+            "step count beyond u64",
+            "`\"steps\": 1e20`",
+            hertz_edit(|v| v["stages"][0]["steps"] = json!(1e20)),
+            Refused(2, &["case.json"]),
+        ),
+        cli(
+            "huge Young's modulus",
+            "`\"E\": 1e300` on both bodies (finite, so valid)",
+            hertz_edit(|v| {
+                v["bodies"][0]["E"] = json!(1e300);
+                v["bodies"][1]["E"] = json!(1e300);
+            }),
+            Refused(3, &["singular"]),
+        ),
+        cli(
+            "huge load",
+            "`\"pilot_y\": {\"force\": -1e300}`",
+            hertz_edit(|v| v["stages"][0]["pilot_y"] = json!({"force": -1e300})),
+            Refused(3, &["contact zone kept growing"]),
+        ),
+        cli(
+            "tiny load",
+            "`\"pilot_y\": {\"force\": -1e-300}`",
+            hertz_edit(|v| v["stages"][0]["pilot_y"] = json!({"force": -1e-300})),
+            Completes,
+        ),
+        cli(
+            "zero load, frictionless",
+            "`cases/hertz.json` on L0 with `\"pilot_y\": {\"force\": 0.0}`",
+            hertz_edit(|v| v["stages"][0]["pilot_y"] = json!({"force": 0.0})),
+            Completes,
+        ),
+        cli(
+            "zero load, Coulomb friction",
+            "`cases/vm272_cm.json` on L0 with every pilot force 0",
+            on_l0(js(&cm_zero)),
+            Completes,
+        ),
+        cli(
+            "zero load, flat blocks",
+            "two flat blocks touching at y = 1, pilot force 0",
+            on_blocks(blocks_case(0.0, None), 1.0),
+            Completes,
+        ),
+        cli(
+            "overlapping bodies",
+            "two flat blocks, the upper one moved down by 0.1 into the lower one",
+            on_blocks(blocks_case(-1.0, None), 0.9),
+            Refused(2, &["penetrate", "lower_top", "upper_bottom", "at ("]),
+        ),
+        cli(
+            "overlapping half-cylinders",
+            "VM272 L0 with every node of `upper_body` moved down by 0.05 mm (initial overlap at x = 0)",
+            vec![("case.json", hertz.clone()), ("mesh.msh", overlapping_vm272(0.05))],
+            Refused(2, &["penetrate", "lower_arc", "upper_arc", "at ("]),
+        ),
+        cli(
+            "faces that do not face each other",
+            "VM272 L0 with `upper_arc` as slave and `bottom` as master",
+            hertz_edit(|v| {
+                v["contact"]["slave"] = json!("upper_arc");
+                v["contact"]["master"] = json!("bottom");
+            }),
+            Refused(2, &["candidate gap"]),
+        ),
+        cli(
+            "unsupported data size in $MeshFormat",
+            "patch_curved.msh with the header `4.1 0 3` (mshio panicked on this before the fix)",
+            vec![
+                ("case.json", patch_case),
+                ("mesh.msh", patch.replacen("4.1 0 8", "4.1 0 3", 1).into_bytes()),
+            ],
+            Refused(2, &["mesh.msh", "data size"]),
+        ),
+        cli(
+            "friction table with one row",
+            "`\"friction\": {\"shape\": \"table\", \"rows\": [[0.0, 0.2]]}`",
+            on_blocks(
+                blocks_case(-1.0, Some(json!({"shape": "table", "rows": [[0.0, 0.2]]}))),
+                1.0,
+            ),
+            Refused(2, &["row"]),
+        ),
+        cli(
+            "friction table, decreasing slip",
+            "`\"rows\": [[1.0, 0.2], [0.0, 0.1]]`",
+            on_blocks(
+                blocks_case(
+                    -1.0,
+                    Some(json!({"shape": "table", "rows": [[1.0, 0.2], [0.0, 0.1]]})),
                 ),
-                ("mesh.msh", ascii_nan.into_bytes()),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["mesh.msh"]),
-        },
-        CliCase {
-            name: "zero-length boundary edge",
-            input: "unit square; an extra line in `bottom` whose three nodes coincide",
-            files: vec![("case.json", square_case.clone()), ("mesh.msh", zero_edge)],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["zero length", "bottom"]),
-        },
-        CliCase {
-            name: "zero-length triangle edge",
-            input: "unit square; two vertices of the first triangle coincide",
-            files: vec![
-                ("case.json", square_case.clone()),
-                ("mesh.msh", zero_tri_edge),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["element 9", "degenerate"]),
-        },
-        CliCase {
-            name: "number out of range (1e400)",
-            input: "`\"E\": 1e400` (JSON has no NaN; 1e400 overflows f64)",
-            files: vec![
-                (
-                    "case.json",
-                    String::from_utf8(hertz.clone())
-                        .unwrap()
-                        .replacen("200.0", "1e400", 1)
-                        .into_bytes(),
-                ),
-                ("mesh.msh", mesh.clone()),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["case.json", "line"]),
-        },
-        CliCase {
-            name: "NaN literal",
-            input: "`\"nu\": NaN`",
-            files: vec![
-                (
-                    "case.json",
-                    String::from_utf8(hertz.clone())
-                        .unwrap()
-                        .replacen("0.3", "NaN", 1)
-                        .into_bytes(),
-                ),
-                ("mesh.msh", mesh.clone()),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["case.json", "line"]),
-        },
-        CliCase {
-            name: "string where a number goes",
-            input: "`\"E\": \"200\"`",
-            files: vec![
-                (
-                    "case.json",
-                    js(&edited(hv(), |v| v["bodies"][0]["E"] = json!("200"))),
-                ),
-                ("mesh.msh", mesh.clone()),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["case.json", "invalid type"]),
-        },
-        CliCase {
-            name: "negative step count",
-            input: "`\"steps\": -1`",
-            files: vec![
-                (
-                    "case.json",
-                    js(&edited(hv(), |v| v["stages"][0]["steps"] = json!(-1))),
-                ),
-                ("mesh.msh", mesh.clone()),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["case.json"]),
-        },
-        CliCase {
-            name: "step count beyond u64",
-            input: "`\"steps\": 1e20`",
-            files: vec![
-                (
-                    "case.json",
-                    js(&edited(hv(), |v| v["stages"][0]["steps"] = json!(1e20))),
-                ),
-                ("mesh.msh", mesh.clone()),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["case.json"]),
-        },
-        CliCase {
-            name: "huge Young's modulus",
-            input: "`\"E\": 1e300` on both bodies (finite, so valid)",
-            files: vec![
-                (
-                    "case.json",
-                    js(&edited(hv(), |v| {
-                        v["bodies"][0]["E"] = json!(1e300);
-                        v["bodies"][1]["E"] = json!(1e300);
-                    })),
-                ),
-                ("mesh.msh", mesh.clone()),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(3, &["singular"]),
-        },
-        CliCase {
-            name: "huge load",
-            input: "`\"pilot_y\": {\"force\": -1e300}`",
-            files: vec![
-                (
-                    "case.json",
-                    js(&edited(hv(), |v| {
-                        v["stages"][0]["pilot_y"] = json!({"force": -1e300})
-                    })),
-                ),
-                ("mesh.msh", mesh.clone()),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(3, &["contact zone kept growing"]),
-        },
-        CliCase {
-            name: "tiny load",
-            input: "`\"pilot_y\": {\"force\": -1e-300}`",
-            files: vec![
-                (
-                    "case.json",
-                    js(&edited(hv(), |v| {
-                        v["stages"][0]["pilot_y"] = json!({"force": -1e-300})
-                    })),
-                ),
-                ("mesh.msh", mesh.clone()),
-            ],
-            args: run(&[]),
-            expect: Expect::Completes,
-        },
-        CliCase {
-            name: "zero load, frictionless",
-            input: "`cases/hertz.json` on L0 with `\"pilot_y\": {\"force\": 0.0}`",
-            files: vec![
-                (
-                    "case.json",
-                    js(&edited(hv(), |v| {
-                        v["stages"][0]["pilot_y"] = json!({"force": 0.0})
-                    })),
-                ),
-                ("mesh.msh", mesh.clone()),
-            ],
-            args: run(&[]),
-            expect: Expect::Completes,
-        },
-        CliCase {
-            name: "zero load, Coulomb friction",
-            input: "`cases/vm272_cm.json` on L0 with every pilot force 0",
-            files: vec![
-                (
-                    "case.json",
-                    js(&{
-                        let mut v: Value = serde_json::from_str(
-                            &std::fs::read_to_string(repo().join("cases/vm272_cm.json")).unwrap(),
-                        )
-                        .unwrap();
-                        v["mesh"] = json!("mesh.msh");
-                        v["stages"][0]["pilot_y"] = json!({"force": 0.0});
-                        v["stages"][1]["pilot_x"] = json!({"force": 0.0});
-                        v["stages"][1]["steps"] = json!(2);
-                        v
-                    }),
-                ),
-                ("mesh.msh", mesh.clone()),
-            ],
-            args: run(&[]),
-            expect: Expect::Completes,
-        },
-        CliCase {
-            name: "zero load, flat blocks",
-            input: "two flat blocks touching at y = 1, pilot force 0",
-            files: vec![
-                ("case.json", js(&blocks_case(0.0, None))),
-                ("mesh.msh", blocks(1.0)),
-            ],
-            args: run(&[]),
-            expect: Expect::Completes,
-        },
-        CliCase {
-            name: "overlapping bodies",
-            input: "two flat blocks, the upper one moved down by 0.1 into the lower one",
-            files: vec![
-                ("case.json", js(&blocks_case(-1.0, None))),
-                ("mesh.msh", blocks(0.9)),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["penetrate", "lower_top", "upper_bottom", "at ("]),
-        },
-        CliCase {
-            name: "overlapping half-cylinders",
-            input: "VM272 L0 with every node of `upper_body` moved down by 0.05 mm (initial overlap at x = 0)",
-            files: vec![
-                ("case.json", hertz.clone()),
-                ("mesh.msh", overlapping_vm272(0.05)),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["penetrate", "lower_arc", "upper_arc", "at ("]),
-        },
-        CliCase {
-            name: "faces that do not face each other",
-            input: "VM272 L0 with `upper_arc` as slave and `bottom` as master",
-            files: vec![
-                (
-                    "case.json",
-                    js(&edited(hv(), |v| {
-                        v["contact"]["slave"] = json!("upper_arc");
-                        v["contact"]["master"] = json!("bottom");
-                    })),
-                ),
-                ("mesh.msh", mesh.clone()),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["candidate gap"]),
-        },
-        CliCase {
-            name: "unsupported data size in $MeshFormat",
-            input: "patch_curved.msh with the header `4.1 0 3` (mshio panicked on this before the fix)",
-            files: vec![
-                (
-                    "case.json",
-                    js(&json!({
-                        "mesh": "mesh.msh",
-                        "bodies": [{"group": "body", "E": 1.0, "nu": 0.3}],
-                        "supports": [{"group": "bottom", "ux": 0.0, "uy": 0.0}],
-                        "stages": [{"steps": 1}]
-                    })),
-                ),
-                (
-                    "mesh.msh",
-                    String::from_utf8(
-                        std::fs::read(repo().join("meshes/patch_curved.msh")).unwrap(),
-                    )
-                    .unwrap()
-                    .replacen("4.1 0 8", "4.1 0 3", 1)
-                    .into_bytes(),
-                ),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["mesh.msh", "data size"]),
-        },
-        CliCase {
-            name: "friction table with one row",
-            input: "`\"friction\": {\"shape\": \"table\", \"rows\": [[0.0, 0.2]]}`",
-            files: vec![
-                (
-                    "case.json",
-                    js(&blocks_case(
-                        -1.0,
-                        Some(json!({"shape": "table", "rows": [[0.0, 0.2]]})),
-                    )),
-                ),
-                ("mesh.msh", blocks(1.0)),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["row"]),
-        },
-        CliCase {
-            name: "friction table, decreasing slip",
-            input: "`\"rows\": [[1.0, 0.2], [0.0, 0.1]]`",
-            files: vec![
-                (
-                    "case.json",
-                    js(&blocks_case(
-                        -1.0,
-                        Some(json!({"shape": "table", "rows": [[1.0, 0.2], [0.0, 0.1]]})),
-                    )),
-                ),
-                ("mesh.msh", blocks(1.0)),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["friction"]),
-        },
-        CliCase {
-            name: "negative friction coefficient",
-            input: "`\"friction\": {\"shape\": \"constant\", \"mu\": -0.2}`",
-            files: vec![
-                (
-                    "case.json",
-                    js(&blocks_case(
-                        -1.0,
-                        Some(json!({"shape": "constant", "mu": -0.2})),
-                    )),
-                ),
-                ("mesh.msh", blocks(1.0)),
-            ],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["friction"]),
-        },
-        CliCase {
-            name: "non-UTF-8 case file",
-            input: "bytes FF FE 00 …",
-            files: vec![("case.json", vec![0xff, 0xfe, 0x00, 0x7b, 0x7d])],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["case.json"]),
-        },
-        CliCase {
-            name: "empty case file",
-            input: "0-byte case.json",
-            files: vec![("case.json", vec![])],
-            args: run(&[]),
-            expect: Expect::Refused(2, &["case.json"]),
-        },
-        CliCase {
-            name: "missing case file",
-            input: "`stickslip run nothere.json`",
-            files: vec![],
-            args: vec!["run".into(), "nothere.json".into(), "--quiet".into()],
-            expect: Expect::Refused(2, &["nothere.json"]),
-        },
-        CliCase {
-            name: "zero threads",
-            input: "`--threads 0`",
-            files: vec![("case.json", hertz.clone()), ("mesh.msh", mesh.clone())],
-            args: run(&["--threads", "0"]),
-            expect: Expect::Refused(2, &["threads"]),
-        },
-        CliCase {
-            name: "triangles on a curve entity",
-            input: "`stickslip mesh-info` on patch_curved.msh with the triangle block's entity dimension 2 → 1 (panicked with exit 101 before the fix)",
-            files: vec![(
-                "mesh.msh",
-                std::fs::read_to_string(repo().join("meshes/patch_curved.msh"))
-                    .unwrap()
-                    .replacen("\n2 1 9 26\n", "\n1 1 9 26\n", 1)
-                    .into_bytes(),
-            )],
-            args: vec!["mesh-info".into(), "mesh.msh".into()],
-            expect: Expect::Refused(2, &["mesh.msh", "dimension 1"]),
-        },
-        CliCase {
-            name: "mesh-info on a truncated mesh",
-            input: "`stickslip mesh-info` on vm272_L0.msh cut at 1000 bytes",
-            files: vec![("mesh.msh", mesh[..1000].to_vec())],
-            args: vec!["mesh-info".into(), "mesh.msh".into()],
-            expect: Expect::Refused(2, &["mesh.msh"]),
-        },
+                1.0,
+            ),
+            Refused(2, &["friction"]),
+        ),
+        cli(
+            "negative friction coefficient",
+            "`\"friction\": {\"shape\": \"constant\", \"mu\": -0.2}`",
+            on_blocks(
+                blocks_case(-1.0, Some(json!({"shape": "constant", "mu": -0.2}))),
+                1.0,
+            ),
+            Refused(2, &["friction"]),
+        ),
+        cli(
+            "non-UTF-8 case file",
+            "bytes FF FE 00 …",
+            vec![("case.json", vec![0xff, 0xfe, 0x00, 0x7b, 0x7d])],
+            Refused(2, &["case.json"]),
+        ),
+        cli(
+            "empty case file",
+            "0-byte case.json",
+            vec![("case.json", vec![])],
+            Refused(2, &["case.json"]),
+        ),
+        cli(
+            "missing case file",
+            "`stickslip run nothere.json`",
+            vec![],
+            Refused(2, &["nothere.json"]),
+        )
+        .args(&["run", "nothere.json", "--quiet"]),
+        cli(
+            "zero threads",
+            "`--threads 0`",
+            on_l0(hertz),
+            Refused(2, &["threads"]),
+        )
+        .args(&[RUN, &["--threads", "0"]].concat()),
+        cli(
+            "triangles on a curve entity",
+            "`stickslip mesh-info` on patch_curved.msh with the triangle block's entity dimension 2 → 1 (panicked with exit 101 before the fix)",
+            vec![("mesh.msh", patch.replacen("\n2 1 9 26\n", "\n1 1 9 26\n", 1).into_bytes())],
+            Refused(2, &["mesh.msh", "dimension 1"]),
+        )
+        .args(&["mesh-info", "mesh.msh"]),
+        cli(
+            "mesh-info on a truncated mesh",
+            "`stickslip mesh-info` on vm272_L0.msh cut at 1000 bytes",
+            vec![("mesh.msh", mesh[..1000].to_vec())],
+            Refused(2, &["mesh.msh"]),
+        )
+        .args(&["mesh-info", "mesh.msh"]),
     ]
 }
 
