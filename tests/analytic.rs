@@ -479,9 +479,10 @@ struct TestCli {
     a: AnalyticArgs,
 }
 
-fn cli(args: &[&str]) -> Result<String, String> {
+/// Runs `stickslip analytic` in-process on `args`, a command line split at whitespace.
+fn cli(args: &str) -> Result<String, String> {
     let mut v = vec!["stickslip"];
-    v.extend_from_slice(args);
+    v.extend(args.split_whitespace());
     let parsed = TestCli::try_parse_from(v).map_err(|e| e.to_string())?;
     let mut buf = Vec::new();
     run(&parsed.a, &mut buf).map_err(|e| e.to_string())?;
@@ -492,33 +493,22 @@ fn cli(args: &[&str]) -> Result<String, String> {
 // and the JKR maximum of eq. (QJKR). Tolerance 1e-12.
 #[test]
 fn cli_examples() {
-    let out = cli(&["jkr", "--psi", "0.1"]).unwrap();
+    let out = cli("jkr --psi 0.1").unwrap();
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let m = JkrCurve::new(0.1).unwrap().maximum();
     assert!((v["q_max_ratio"].as_f64().unwrap() - m.q_ratio).abs() < 1e-12);
     assert!((v["c_max_over_a"].as_f64().unwrap() - m.c_over_a).abs() < 1e-12);
-    let out = cli(&[
-        "dcm",
-        "--fs",
-        "0.15",
-        "--fd",
-        "0.1",
-        "--lambda",
-        "0.05",
-        "--q-ratio",
-        "0.8",
-    ])
-    .unwrap();
+    let out = cli("dcm --fs 0.15 --fd 0.1 --lambda 0.05 --q-ratio 0.8").unwrap();
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let (c, b) = (
         v["c_over_a"].as_f64().unwrap(),
         v["b_over_a"].as_f64().unwrap(),
     );
     assert!(0.0 < c && c < b && b < 1.0);
-    let out = cli(&["jkr-curve", "--psi", "0.1", "--n", "11"]).unwrap();
+    let out = cli("jkr-curve --psi 0.1 --n 11").unwrap();
     assert_eq!(out.lines().next().unwrap(), "c_over_a,q_ratio,stable");
     assert_eq!(out.lines().count(), 12);
-    let out = cli(&["cm", "--mu", "0.2", "--q", "0.936"]).unwrap();
+    let out = cli("cm --mu 0.2 --q 0.936").unwrap();
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert!((v["c_over_a"].as_f64().unwrap() - 0.729).abs() < 5e-4);
 }
@@ -526,91 +516,37 @@ fn cli_examples() {
 // Reference: bad parameters must give an error whose message names the problem.
 #[test]
 fn cli_bad_parameters() {
-    let cases: &[(&[&str], &str)] = &[
+    let cases: &[(&str, &str)] = &[
         (
-            &[
-                "dcm",
-                "--fs",
-                "0.1",
-                "--fd",
-                "0.15",
-                "--lambda",
-                "0.05",
-                "--q-ratio",
-                "0.8",
-            ],
+            "dcm --fs 0.1 --fd 0.15 --lambda 0.05 --q-ratio 0.8",
             "exceeds f_s",
         ),
-        (&["jkr", "--psi=-0.1"], "Psi must be non-negative"),
+        ("jkr --psi=-0.1", "Psi must be non-negative"),
+        ("jkr --psi 0.1 --q-ratio 1.5", "exceeds Q_max/(f_d P)"),
         (
-            &["jkr", "--psi", "0.1", "--q-ratio", "1.5"],
-            "exceeds Q_max/(f_d P)",
-        ),
-        (
-            &[
-                "dcm",
-                "--fs",
-                "0.15",
-                "--fd",
-                "0.1",
-                "--lambda",
-                "0.05",
-                "--q-ratio",
-                "1.6",
-            ],
+            "dcm --fs 0.15 --fd 0.1 --lambda 0.05 --q-ratio 1.6",
             "exceeds f_s P",
         ),
         (
-            &[
-                "dcm",
-                "--fs",
-                "0.15",
-                "--fd",
-                "0.1",
-                "--lambda",
-                "5",
-                "--q-ratio",
-                "0.5",
-            ],
+            "dcm --fs 0.15 --fd 0.1 --lambda 5 --q-ratio 0.5",
             "b would exceed a",
         ),
         (
-            &[
-                "dcm",
-                "--fs",
-                "0.15",
-                "--fd",
-                "0.1",
-                "--delta=-1e-3",
-                "--q-ratio",
-                "0.5",
-            ],
+            "dcm --fs 0.15 --fd 0.1 --delta=-1e-3 --q-ratio 0.5",
             "must be non-negative",
         ),
-        (&["cm", "--mu", "0.2", "--q", "3"], "exceeds f P"),
-        (&["hertz", "--nu1", "0.7"], "Poisson"),
-        (&["hertz", "--load=-1"], "must be positive"),
+        ("cm --mu 0.2 --q 3", "exceeds f P"),
+        ("hertz --nu1 0.7", "Poisson"),
+        ("hertz --load=-1", "must be positive"),
         (
-            &["law", "--json", r#"{"shape":"table","rows":[[0,0.2]]}"#],
+            r#"law --json {"shape":"table","rows":[[0,0.2]]}"#,
             "at least 2 rows",
         ),
-        (&["law", "--preset", "gold"], "unknown friction preset"),
-        (
-            &["law", "--shape", "ramp", "--fs", "0.15", "--fd", "0.1"],
-            "--delta is required",
-        ),
-        (
-            &["implied-law", "--a-over-c", "1.6", "--b-over-c", "2"],
-            "outside",
-        ),
-        (
-            &["apparent", "--chi", "0.05", "--fs-over-fd", "0.9"],
-            "exceeds f_s",
-        ),
-        (
-            &["dcm", "--fs", "0.15", "--fd", "0.1", "--q-ratio", "0.8"],
-            "required",
-        ),
+        ("law --preset gold", "unknown friction preset"),
+        ("law --shape ramp --fs 0.15 --fd 0.1", "--delta is required"),
+        ("implied-law --a-over-c 1.6 --b-over-c 2", "outside"),
+        ("apparent --chi 0.05 --fs-over-fd 0.9", "exceeds f_s"),
+        ("dcm --fs 0.15 --fd 0.1 --q-ratio 0.8", "required"),
     ];
     for (args, needle) in cases {
         let e = cli(args).expect_err(&format!("{args:?} should fail"));
@@ -620,11 +556,6 @@ fn cli_bad_parameters() {
         );
     }
     // an unsettled table is reported, not an error
-    let out = cli(&[
-        "law",
-        "--json",
-        r#"{"shape":"table","rows":[[0,0.2],[1,0.1]]}"#,
-    ])
-    .unwrap();
+    let out = cli(r#"law --json {"shape":"table","rows":[[0,0.2],[1,0.1]]}"#).unwrap();
     assert!(out.contains("does not settle"), "{out}");
 }
