@@ -197,7 +197,11 @@ fn peak_study(repo: &std::path::Path, tmp: &std::path::Path, threads: &str) {
                     println!(
                         "| {method} | {shape} | {control} | L{level} | {exit} | {q_max:.5} | {:+.2} % | {c_peak:.3} | {} | {past} | {its:.1} | {cut} |",
                         100.0 * (q_max / q_jkr - 1.0),
-                        if past > 0 { format!("{c_low:.3}") } else { "—".into() },
+                        if past > 0 {
+                            format!("{c_low:.3}")
+                        } else {
+                            "—".into()
+                        },
                     );
                     rows.push(format!(
                         "{method},{shape},{control},{level},{exit},{q_max:.6},{:.6},{c_peak:.4},{c_low:.4},{past},{its:.3},{cut}",
