@@ -252,17 +252,17 @@ impl ContactSystem {
     /// `guess`: predicted forces for this step (e.g. extrapolated from the last two steps); the
     /// first active sets are taken from it instead of from the committed state.
     ///
-    /// `cache`: factorisations kept from earlier iterations and steps. With the Newton method
-    /// (and a force- or displacement-driven pilot) each Newton system is solved from a cached
-    /// LU of the Delassus block `K = W[unk, unk]`, which depends on the contact set only, plus
+    /// `cache`: factorisations kept from earlier iterations and steps. With the Newton method (and
+    /// a force- or displacement-driven pilot) each Newton system is solved from a cached Cholesky
+    /// factor of the Delassus block `K = W[unk, unk]`, which depends on the contact set only, plus
     /// a small capacitance system for the rows that differ from `K` (slip nodes, force-driven
     /// anchors): see [`LuCache::solve_rows`]. Through a tangential ramp the contact set hardly
     /// changes, so one factorisation serves many steps and no dense Newton matrix is assembled.
-    /// Otherwise (penalty, augmented Lagrangian, other drives) the dense system is solved by
-    /// GMRES preconditioned with the cached LU of an earlier dense system, refactorised when
-    /// GMRES needs more than a handful of iterations. Either way the tangential forces of slip
-    /// nodes are kept as unknowns (not substituted) so that the unknowns do not change with
-    /// every stick/slip change.
+    /// Otherwise (penalty, augmented Lagrangian, other drives) the dense system is solved by GMRES
+    /// preconditioned with the cached LU of an earlier dense system, refactorised when GMRES needs
+    /// more than a handful of iterations. Either way the tangential forces of slip nodes are kept
+    /// as unknowns (not substituted) so that the unknowns do not change with every stick/slip
+    /// change.
     #[allow(clippy::too_many_arguments)]
     pub fn solve_step(
         &self,
@@ -406,7 +406,7 @@ impl ContactSystem {
                 // the dense system below decides.
                 if let Some(c) = cache.as_deref_mut().filter(|_| m >= STRUCTURED_MIN)
                     && let Some(rows) = self.newton_rows(&it_ctx)
-                    && let Some(x) = c.solve_rows(&self.w, &rows)
+                    && let Some(x) = c.solve_rows(&self.w, &rows, it == 1)
                 {
                     let mut new_mu = vec![0.0; m];
                     for (q, &u) in rows.unk.iter().enumerate() {
@@ -826,7 +826,7 @@ fn singular_pivots(lu: &faer::linalg::solvers::PartialPivLu<f64>) -> bool {
 /// Factorisations kept across Newton iterations and load steps (see
 /// [`ContactSystem::solve_step`]).
 ///
-/// The structured path ([`Self::solve_rows`]) keeps the LU of a Delassus block
+/// The structured path ([`Self::solve_rows`]) keeps the Cholesky factor of a Delassus block
 /// `K = W[k_unk, k_unk]` and solves each Newton system `A x = b` whose matrix differs from `K`
 /// only in a few rows by the Sherman–Morrison–Woodbury identity; the dense path
 /// ([`Self::solve`]) keeps the LU of an earlier Newton matrix as a GMRES preconditioner.
@@ -836,11 +836,12 @@ pub struct LuCache {
     unk: Vec<usize>,
     lu: Option<faer::linalg::solvers::PartialPivLu<f64>>,
     /// Structured path: unknowns (μ indices) of the factorised block `K`, the position in it
-    /// of each μ index (`usize::MAX`: not in it), its LU, and the columns `K⁻¹ e_q` computed so
-    /// far by position `q` (empty: not yet).
+    /// of each μ index (`usize::MAX`: not in it), its Cholesky factor (`K = Zᵀ Z` restricted to
+    /// the unknowns is symmetric positive definite), and the columns `K⁻¹ e_q` computed so far
+    /// by position `q` (empty: not yet).
     k_unk: Vec<usize>,
     k_pos: Vec<usize>,
-    k_lu: Option<faer::linalg::solvers::PartialPivLu<f64>>,
+    k_llt: Option<faer::linalg::solvers::Llt<f64>>,
     k_cols: Vec<Vec<f64>>,
     /// Factorisations done (of `K` or of a dense Newton matrix) and GMRES iterations spent (for
     /// the run summary).
@@ -863,15 +864,15 @@ impl LuCache {
     pub fn clear(&mut self) {
         self.lu = None;
         self.unk.clear();
-        self.k_lu = None;
+        self.k_llt = None;
         self.k_unk.clear();
         self.k_pos.clear();
         self.k_cols.clear();
     }
 
     /// Solves the structured Newton system `rows` (see [`ContactSystem::newton_rows`]) with the
-    /// cached LU of a Delassus block `K` whose unknowns include those of `rows`; `w` is the
-    /// whole Delassus operator. `None` if `K` or the system is numerically singular, or the
+    /// cached Cholesky factor of a Delassus block `K` whose unknowns include those of `rows`; `w`
+    /// is the whole Delassus operator. `None` if `K` or the system is numerically singular, or the
     /// answer is not finite (the caller then assembles the dense system, whose LU decides).
     ///
     /// Why: through a load history the contact set changes little, and the Newton matrix
@@ -885,17 +886,28 @@ impl LuCache {
     /// ```
     /// where `A_P G` has the entries `α G_rj + γ G_qj + β δ_rj` (because `K G = E_P`) and
     /// `B x0 = α x0_r + γ x0_q + (β − 1) b_r` (because `K x0 = b`). Each iteration costs one
-    /// solve with the cached LU and a `p × p` factorisation; the columns of `G` are kept until
-    /// `K` is refactorised, so a node that starts to slip costs one more solve, once.
-    pub fn solve_rows(&mut self, w: &Mat<f64>, rows: &NewtonRows) -> Option<Vec<f64>> {
-        let covered = self.k_lu.is_some()
+    /// solve with the cached factor and a `p × p` factorisation; the columns of `G` are kept
+    /// until `K` is refactorised, so a node that starts to slip costs one more solve, once.
+    ///
+    /// `new_step`: the first iteration of a load step. While the contact set settles within a
+    /// step, `K` is kept until a quarter of its unknowns have left; at the start of a step it
+    /// is refactorised for the current set once more than 1/64 have, since those rows would
+    /// otherwise enlarge the capacitance system of every iteration of the steps to come.
+    pub fn solve_rows(
+        &mut self,
+        w: &Mat<f64>,
+        rows: &NewtonRows,
+        new_step: bool,
+    ) -> Option<Vec<f64>> {
+        let covered = self.k_llt.is_some()
             && rows
                 .unk
                 .iter()
                 .all(|&u| self.k_pos.get(u).is_some_and(|&q| q != usize::MAX));
         // Unknowns of K not in this system: each costs a special row (and a column of G).
         let left = self.k_unk.len().saturating_sub(rows.unk.len());
-        if !covered || 4 * left > self.k_unk.len() {
+        let limit = self.k_unk.len() / if new_step { 64 } else { 4 };
+        if !covered || left > limit {
             self.factorise_block(w, &rows.unk)?;
         }
         let nk = self.k_unk.len();
@@ -921,7 +933,7 @@ impl LuCache {
             gamma: 0.0,
             col: q,
         }));
-        let lu = self.k_lu.as_ref()?;
+        let llt = self.k_llt.as_ref()?;
         // Columns of G not computed yet, in one solve with several right-hand sides.
         let missing: Vec<usize> = special
             .iter()
@@ -933,13 +945,13 @@ impl LuCache {
             for (c, &q) in missing.iter().enumerate() {
                 e[(q, c)] = 1.0;
             }
-            lu.solve_in_place(&mut e);
+            llt.solve_in_place(&mut e);
             for (c, &q) in missing.iter().enumerate() {
                 self.k_cols[q] = e.col(c).iter().copied().collect();
             }
         }
         let mut x0 = Mat::from_fn(nk, 1, |i, _| b[i]);
-        lu.solve_in_place(&mut x0);
+        llt.solve_in_place(&mut x0);
         let mut x: Vec<f64> = x0.col(0).iter().copied().collect();
         let p = special.len();
         if p > 0 {
@@ -984,19 +996,24 @@ impl LuCache {
         x.iter().all(|v| v.is_finite()).then_some(x)
     }
 
-    /// Factorises `K = W[unk, unk]` for [`Self::solve_rows`]; `None` if it is singular.
+    /// Factorises `K = W[unk, unk]` for [`Self::solve_rows`]; `None` if it is singular or not
+    /// numerically positive definite.
     fn factorise_block(&mut self, w: &Mat<f64>, unk: &[usize]) -> Option<()> {
         let k = Mat::from_fn(unk.len(), unk.len(), |i, j| w[(unk[i], unk[j])]);
-        let lu = k.partial_piv_lu();
+        let llt = k.llt(faer::Side::Lower).ok();
         self.factorisations += 1;
-        self.k_lu = None;
+        self.k_llt = None;
         self.k_unk.clear();
         self.k_pos.clear();
         self.k_cols.clear();
-        // Pivots within 2^52 of the smallest normal number have lost digits to underflow
-        // (absurd moduli make W that small): not to be trusted.
-        let tiny = f64::MIN_POSITIVE / f64::EPSILON;
-        if singular_pivots(&lu) || (0..unk.len()).any(|i| lu.U()[(i, i)].abs() < tiny) {
+        let llt = llt?;
+        // The pivots are L_ii²: as for an LU, singular when the smallest is below 1e-12 of the
+        // largest; and pivots within 2^52 of the smallest normal number have lost digits to
+        // underflow (absurd moduli make W that small).
+        let pivots: Vec<f64> = (0..unk.len()).map(|i| llt.L()[(i, i)].powi(2)).collect();
+        let lo = pivots.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = pivots.iter().copied().fold(0.0, f64::max);
+        if lo <= 1e-12 * hi || lo < f64::MIN_POSITIVE / f64::EPSILON {
             return None;
         }
         self.k_pos = vec![usize::MAX; w.nrows()];
@@ -1005,7 +1022,7 @@ impl LuCache {
         }
         self.k_unk = unk.to_vec();
         self.k_cols = vec![Vec::new(); unk.len()];
-        self.k_lu = Some(lu);
+        self.k_llt = Some(llt);
         Some(())
     }
 
