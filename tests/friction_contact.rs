@@ -498,7 +498,7 @@ fn structured_newton_solve_matches_the_dense_system() {
             slip > 0 && rows.special.len() >= slip,
             "{case}: no slip rows"
         );
-        let x = cache.solve_rows(&cm.system.w, &rows, false).unwrap();
+        let (x, w_mu) = cache.solve_rows(&cm.system.w, &rows, false).unwrap();
         let dense = faer::linalg::solvers::Solve::solve(&sys.a.partial_piv_lu(), &sys.b);
         let xmax = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let diff = (0..x.len())
@@ -517,6 +517,19 @@ fn structured_newton_solve_matches_the_dense_system() {
             rows.special.len()
         );
         assert!(diff < 1e-10 && res < 1e-13, "{case}: {diff:e} {res:e}");
+        // W μ of the solution, as returned, against the product.
+        let mut mu_new = vec![0.0; mu.len()];
+        for (q, &u) in rows.unk.iter().enumerate() {
+            mu_new[u] = x[q];
+        }
+        let w = &cm.system.w;
+        let wmax = w_mu.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let w_diff = (0..mu.len())
+            .map(|i| (w_mu[i] - (0..mu.len()).map(|j| w[(i, j)] * mu_new[j]).sum::<f64>()).abs())
+            .fold(0.0, f64::max)
+            / wmax;
+        println!("{case}: |W μ returned − W μ|/|W μ| = {w_diff:.2e}");
+        assert!(w_diff < 1e-10, "{case}: {w_diff:e}");
     }
     assert_eq!(
         cache.factorisations, 1,

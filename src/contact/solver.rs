@@ -311,8 +311,13 @@ impl ContactSystem {
             .collect();
         let mut last_update = f64::INFINITY;
         let mut solved = false;
+        // `W μ` of the current iterate when the last solve gave it.
+        let mut w_mu: Option<Vec<f64>> = None;
         for it in 1..=opt.max_iterations {
-            let y = self.y(w0, &mu);
+            let y = match w_mu.take() {
+                Some(w_mu) => w0.iter().zip(&w_mu).map(|(a, b)| a + b).collect(),
+                None => self.y(w0, &mu),
+            };
             // Sets from the current iterate (without a guess, the first iteration keeps the
             // committed sets).
             let mut changes = 0;
@@ -406,12 +411,13 @@ impl ContactSystem {
                 // the dense system below decides.
                 if let Some(c) = cache.as_deref_mut().filter(|_| m >= STRUCTURED_MIN)
                     && let Some(rows) = self.newton_rows(&it_ctx)
-                    && let Some(x) = c.solve_rows(&self.w, &rows, it == 1)
+                    && let Some((x, w_mu_new)) = c.solve_rows(&self.w, &rows, it == 1)
                 {
                     let mut new_mu = vec![0.0; m];
                     for (q, &u) in rows.unk.iter().enumerate() {
                         new_mu[u] = x[q];
                     }
+                    w_mu = Some(w_mu_new);
                     break 'solve new_mu;
                 }
                 let NewtonSystem {
@@ -871,9 +877,12 @@ impl LuCache {
     }
 
     /// Solves the structured Newton system `rows` (see [`ContactSystem::newton_rows`]) with the
-    /// cached Cholesky factor of a Delassus block `K` whose unknowns include those of `rows`; `w`
-    /// is the whole Delassus operator. `None` if `K` or the system is numerically singular, or the
-    /// answer is not finite (the caller then assembles the dense system, whose LU decides).
+    /// cached Cholesky factor of a Delassus block `K` whose unknowns include those of `rows`;
+    /// `w` is the whole Delassus operator. Returns the unknowns (ordered as `rows.unk`) and
+    /// `W μ` at the new iterate (all rows of `W`; on the system's own rows it is taken from the
+    /// equations, which saves most of a product with `W` per iteration). `None` if `K` or the
+    /// system is numerically singular, or the answer is not finite (the caller then assembles
+    /// the dense system, whose LU decides).
     ///
     /// Why: through a load history the contact set changes little, and the Newton matrix
     /// differs from `K = W[unk, unk]` only in the rows of slip nodes and force-driven anchors
@@ -898,7 +907,7 @@ impl LuCache {
         w: &Mat<f64>,
         rows: &NewtonRows,
         new_step: bool,
-    ) -> Option<Vec<f64>> {
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
         let covered = self.k_llt.is_some()
             && rows
                 .unk
@@ -954,6 +963,7 @@ impl LuCache {
         llt.solve_in_place(&mut x0);
         let mut x: Vec<f64> = x0.col(0).iter().copied().collect();
         let p = special.len();
+        let mut y_cap = Vec::new();
         if p > 0 {
             let mut cap = Mat::<f64>::zeros(p, p);
             let mut rhs = Mat::<f64>::zeros(p, 1);
@@ -985,15 +995,35 @@ impl LuCache {
                 return None;
             }
             let y = clu.solve(&rhs);
-            for (j, sj) in special.iter().enumerate() {
-                let yj = y[(j, 0)];
+            y_cap = (0..p).map(|j| y[(j, 0)]).collect();
+            for (sj, yj) in special.iter().zip(&y_cap) {
                 for (xi, gi) in x.iter_mut().zip(&self.k_cols[sj.row]) {
                     *xi -= gi * yj;
                 }
             }
         }
-        let x: Vec<f64> = rows.unk.iter().map(|&u| x[self.k_pos[u]]).collect();
-        x.iter().all(|v| v.is_finite()).then_some(x)
+        // W μ of the new iterate, for the next iteration's sets: on this system's rows it is
+        // what the rows impose, `K x = b − E_P y`, the others are products with W.
+        let mut w_mu = vec![0.0; w.nrows()];
+        let xs: Vec<f64> = rows.unk.iter().map(|&u| x[self.k_pos[u]]).collect();
+        let mut in_unk = vec![false; w.nrows()];
+        for &u in &rows.unk {
+            in_unk[u] = true;
+            w_mu[u] = b[self.k_pos[u]];
+        }
+        for (sj, yj) in special.iter().zip(&y_cap) {
+            let u = self.k_unk[sj.row];
+            if in_unk[u] {
+                w_mu[u] -= yj;
+            }
+        }
+        for (i, wi) in w_mu.iter_mut().enumerate() {
+            if !in_unk[i] {
+                let col = w.col(i);
+                *wi = rows.unk.iter().zip(&xs).map(|(&u, xu)| col[u] * xu).sum();
+            }
+        }
+        xs.iter().all(|v| v.is_finite()).then_some((xs, w_mu))
     }
 
     /// Factorises `K = W[unk, unk]` for [`Self::solve_rows`]; `None` if it is singular or not
