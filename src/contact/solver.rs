@@ -835,7 +835,7 @@ fn singular_pivots(lu: &faer::linalg::solvers::PartialPivLu<f64>) -> bool {
 /// The structured path ([`Self::solve_rows`]) keeps the Cholesky factor of a Delassus block
 /// `K = W[k_unk, k_unk]` and solves each Newton system `A x = b` whose matrix differs from `K`
 /// only in a few rows by the Sherman–Morrison–Woodbury identity; the dense path
-/// ([`Self::solve`]) keeps the LU of an earlier Newton matrix as a GMRES preconditioner.
+/// (`LuCache::solve`) keeps the LU of an earlier Newton matrix as a GMRES preconditioner.
 #[derive(Default)]
 pub struct LuCache {
     /// Dense path: unknowns and LU of the last factorised Newton matrix.
