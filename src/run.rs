@@ -1407,6 +1407,8 @@ pub struct SweepRow {
     pub status: String,
     pub steps: usize,
     pub newton_iterations: usize,
+    /// Factorisations of the contact Newton solves (see [`Summary::lu_factorisations`]).
+    pub lu_factorisations: usize,
     pub wall_s: f64,
     /// Stick and transition semi-widths at the last converged step.
     pub c: f64,
@@ -1446,6 +1448,7 @@ pub fn sweep(model: &Model, case: &Case, laws: &[crate::friction::FrictionLaw]) 
                         status,
                         steps: sim.records.len(),
                         newton_iterations: sim.newton_iterations,
+                        lu_factorisations: sim.lu_factorisations,
                         wall_s,
                         c: last.map_or(0.0, |f| f.c),
                         b: last.map_or(0.0, |f| f.b),
@@ -1457,6 +1460,7 @@ pub fn sweep(model: &Model, case: &Case, laws: &[crate::friction::FrictionLaw]) 
                     status: format!("error: {e}"),
                     steps: 0,
                     newton_iterations: 0,
+                    lu_factorisations: 0,
                     wall_s,
                     c: 0.0,
                     b: 0.0,

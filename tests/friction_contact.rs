@@ -400,3 +400,128 @@ fn figure_3_with_the_law_implied_by_double_cattaneo_mindlin() {
     // The ramp's deviation is then a property of the closed form, not of the FE.
     assert!((f.c / s.c - 1.0).abs() < (ramp.c / s.c - 1.0).abs());
 }
+
+/// The cached structured solve (`LuCache::solve_rows`: a Cholesky factor of the Delassus block
+/// and a capacitance system for the slip and anchor rows) gives the solution of the assembled
+/// Newton system, both with the block factorised for the system's own unknowns and with a block
+/// factorised for more unknowns than the system has (nodes that left the contact).
+#[test]
+fn structured_newton_solve_matches_the_dense_system() {
+    use stickslip::case::{Case, Control};
+    use stickslip::contact::solver::{Iterate, LuCache, Method, Options, PilotDrive, Status};
+    use stickslip::friction::FrictionLaw;
+    let law = FrictionLaw::ramp(0.15, 0.1, 2e-3).unwrap();
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(repo().join("cases/fig2.json")).unwrap())
+            .unwrap();
+    v["mesh"] = json!(repo().join("meshes/vm272_L1.msh").to_str().unwrap());
+    let case: Case = serde_json::from_value(v).unwrap();
+    let model = stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap();
+    let cm = model.contact.as_ref().unwrap();
+    let opt = Options {
+        method: Method::Newton,
+        kappa: 100.0,
+        max_iterations: 80,
+        tolerance: 1e-12,
+        verbose: false,
+    };
+    let mut st = cm.system.initial_state();
+    for q in [0.0, 0.3, 0.6, 0.7] {
+        st = model
+            .solve_contact_step(
+                0.0,
+                [Control::Force(q), Control::Force(-10.0)],
+                &st,
+                None,
+                &opt,
+                Some(&law),
+                None,
+            )
+            .unwrap()
+            .state;
+    }
+    let ns = cm.system.ns;
+    // An iterate off the solution, so that slip rows have μ' ≠ 0 and Δv ≠ 0.
+    let mut mu: Vec<f64> = st.f_n.iter().chain(&st.f_t).chain(&st.z).copied().collect();
+    for (k, m) in mu.iter_mut().enumerate() {
+        *m *= 1.0 + 1e-3 * ((k % 7) as f64 - 3.0);
+    }
+    let sign: Vec<f64> = st
+        .f_t
+        .iter()
+        .map(|f| if *f < 0.0 { -1.0 } else { 1.0 })
+        .collect();
+    let w0 = vec![0.0; mu.len()];
+    let zeros = vec![0.0; ns];
+    let mut prev = st.clone();
+    prev.slip.iter_mut().for_each(|s| *s *= 0.5);
+    let mut status = st.status.clone();
+    let mut cache = LuCache::default();
+    for (case, opened) in [("own unknowns", 0), ("fewer unknowns than the block", 2)] {
+        // Open the outermost contact nodes on each side.
+        for _ in 0..opened {
+            let first = status.iter().position(|s| *s != Status::Open).unwrap();
+            let last = status.iter().rposition(|s| *s != Status::Open).unwrap();
+            status[first] = Status::Open;
+            status[last] = Status::Open;
+        }
+        let it = Iterate {
+            w0: &w0,
+            drive: [PilotDrive::Force(0.7), PilotDrive::Force(-10.0)],
+            law: Some(&law),
+            substitute: false,
+            prev: &prev,
+            mu: &mu,
+            status: &status,
+            sign: &sign,
+            method: Method::Newton,
+            eps: &zeros,
+            fbar_n: &zeros,
+            fbar_t: &zeros,
+        };
+        let sys = cm.system.newton_system(&it);
+        let rows = cm.system.newton_rows(&it).unwrap();
+        assert_eq!(rows.unk, sys.unk);
+        let slip = (0..ns).filter(|&j| status[j] == Status::Slip).count();
+        assert!(
+            slip > 0 && rows.special.len() >= slip,
+            "{case}: no slip rows"
+        );
+        let (x, w_mu) = cache.solve_rows(&cm.system.w, &rows, false).unwrap();
+        let dense = faer::linalg::solvers::Solve::solve(&sys.a.partial_piv_lu(), &sys.b);
+        let xmax = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let diff = (0..x.len())
+            .map(|i| (x[i] - dense[(i, 0)]).abs())
+            .fold(0.0, f64::max)
+            / xmax;
+        let res = (0..x.len())
+            .map(|r| {
+                ((0..x.len()).map(|q| sys.a[(r, q)] * x[q]).sum::<f64>() - sys.b[(r, 0)]).abs()
+            })
+            .fold(0.0, f64::max)
+            / (sys.a.norm_max() * xmax);
+        println!(
+            "{case}: {} unknowns, {} special rows, {slip} slip nodes; |x − x_dense|/|x| = {diff:.2e}, residual {res:.2e}",
+            x.len(),
+            rows.special.len()
+        );
+        assert!(diff < 1e-10 && res < 1e-13, "{case}: {diff:e} {res:e}");
+        // W μ of the solution, as returned, against the product.
+        let mut mu_new = vec![0.0; mu.len()];
+        for (q, &u) in rows.unk.iter().enumerate() {
+            mu_new[u] = x[q];
+        }
+        let w = &cm.system.w;
+        let wmax = w_mu.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let w_diff = (0..mu.len())
+            .map(|i| (w_mu[i] - (0..mu.len()).map(|j| w[(i, j)] * mu_new[j]).sum::<f64>()).abs())
+            .fold(0.0, f64::max)
+            / wmax;
+        println!("{case}: |W μ returned − W μ|/|W μ| = {w_diff:.2e}");
+        assert!(w_diff < 1e-10, "{case}: {w_diff:e}");
+    }
+    assert_eq!(
+        cache.factorisations, 1,
+        "the second system reuses the block"
+    );
+}

@@ -33,3 +33,43 @@ pub fn run_case(case: &Value, name: &str, dir: &Path, threads: &str) -> (bool, f
         .unwrap_or(Value::Null);
     (st.success(), wall, summary)
 }
+
+/// Writes `case` to `dir/name.json` and `{"friction": laws}` to `dir/name_sweep.json`, runs
+/// `stickslip sweep` on them into `dir/name_sweep/` with `--quiet --threads T`, and returns
+/// whether it exited successfully, the wall time of the process and its `sweep.json`
+/// (`Value::Null` if none was written).
+pub fn run_sweep(
+    case: &Value,
+    laws: &[Value],
+    name: &str,
+    dir: &Path,
+    threads: &str,
+) -> (bool, f64, Value) {
+    let path = dir.join(format!("{name}.json"));
+    std::fs::write(&path, serde_json::to_string(case).expect("serialisable"))
+        .expect("writable temp dir");
+    let sweep = dir.join(format!("{name}_sweep.json"));
+    std::fs::write(&sweep, serde_json::json!({ "friction": laws }).to_string())
+        .expect("writable temp dir");
+    let out = dir.join(format!("{name}_sweep"));
+    let t = std::time::Instant::now();
+    let st = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args([
+            "sweep",
+            path.to_str().expect("utf-8 path"),
+            sweep.to_str().expect("utf-8 path"),
+            "--out",
+            out.to_str().expect("utf-8 path"),
+            "--quiet",
+            "--threads",
+            threads,
+        ])
+        .status()
+        .expect("the stickslip binary runs");
+    let wall = t.elapsed().as_secs_f64();
+    let table = std::fs::read_to_string(out.join("sweep.json"))
+        .ok()
+        .and_then(|s| serde_json::from_str(&s).ok())
+        .unwrap_or(Value::Null);
+    (st.success(), wall, table)
+}

@@ -135,6 +135,28 @@ pub struct NewtonSystem {
     pub slip_lin: Vec<(f64, f64, f64, f64)>,
 }
 
+/// The Newton system of one iteration in the structured form [`LuCache::solve_rows`] solves
+/// without assembling it (see [`ContactSystem::newton_rows`]): row `r` of the matrix is row `r`
+/// of `K = W[unk, unk]`, except for the rows in `special`.
+pub struct NewtonRows {
+    /// μ index of each unknown: every contact node's normal and (with friction) tangential
+    /// force, then the anchors; none substituted, so this depends on the contact set only.
+    pub unk: Vec<usize>,
+    pub b: Vec<f64>,
+    /// The rows that differ from `K` (slip nodes, force-driven anchors), in increasing order.
+    pub special: Vec<SpecialRow>,
+}
+
+/// Row `row` of a [`NewtonRows`] matrix: `α e_row + β K_row + γ e_col`.
+#[derive(Clone, Copy, Debug)]
+pub struct SpecialRow {
+    pub row: usize,
+    pub alpha: f64,
+    pub beta: f64,
+    pub gamma: f64,
+    pub col: usize,
+}
+
 /// The condensed contact operator.
 pub struct ContactSystem {
     pub ns: usize,
@@ -264,12 +286,17 @@ impl ContactSystem {
     /// `guess`: predicted forces for this step (e.g. extrapolated from the last two steps); the
     /// first active sets are taken from it instead of from the committed state.
     ///
-    /// `cache`: a factorisation kept from earlier iterations and steps. While the unknowns stay
-    /// the same (through a tangential ramp only stick/slip rows change), each Newton system is
-    /// solved by GMRES preconditioned with the cached LU — a few matrix–vector products instead
-    /// of a new factorisation — and refactorised when GMRES needs more than a handful of
-    /// iterations. Tangential forces of slip nodes are then kept as unknowns (not substituted)
-    /// so that the unknowns do not change with every stick/slip change.
+    /// `cache`: factorisations kept from earlier iterations and steps. With the Newton method (and
+    /// a force- or displacement-driven pilot) each Newton system is solved from a cached Cholesky
+    /// factor of the Delassus block `K = W[unk, unk]`, which depends on the contact set only, plus
+    /// a small capacitance system for the rows that differ from `K` (slip nodes, force-driven
+    /// anchors): see [`LuCache::solve_rows`]. Through a tangential ramp the contact set hardly
+    /// changes, so one factorisation serves many steps and no dense Newton matrix is assembled.
+    /// Otherwise (penalty, augmented Lagrangian, other drives) the dense system is solved by GMRES
+    /// preconditioned with the cached LU of an earlier dense system, refactorised when GMRES needs
+    /// more than a handful of iterations. Either way the tangential forces of slip nodes are kept
+    /// as unknowns (not substituted) so that the unknowns do not change with every stick/slip
+    /// change.
     #[allow(clippy::too_many_arguments)]
     pub fn solve_step(
         &self,
@@ -318,8 +345,13 @@ impl ContactSystem {
             .collect();
         let mut last_update = f64::INFINITY;
         let mut solved = false;
+        // `W μ` of the current iterate when the last solve gave it.
+        let mut w_mu: Option<Vec<f64>> = None;
         for it in 1..=opt.max_iterations {
-            let y = self.y(w0, &mu);
+            let y = match w_mu.take() {
+                Some(w_mu) => w0.iter().zip(&w_mu).map(|(a, b)| a + b).collect(),
+                None => self.y(w0, &mu),
+            };
             // Sets from the current iterate (without a guess, the first iteration keeps the
             // committed sets).
             let mut changes = 0;
@@ -409,45 +441,61 @@ impl ContactSystem {
                 fbar_n: &fbar_n,
                 fbar_t: &fbar_t,
             };
-            let NewtonSystem {
-                a,
-                b,
-                unk,
-                substituted,
-                slip_lin,
-            } = self.newton_system(&it_ctx);
-            let nu = unk.len();
-            let x = match cache.as_deref_mut() {
-                Some(c) => c.solve(&unk, &a, &b),
-                None => {
-                    let lu = a.partial_piv_lu();
-                    let x = lu.solve(&b);
-                    if singular_pivots(&lu) { None } else { Some(x) }
+            let new_mu = 'solve: {
+                // The structured solve; on any trouble (a singular block, a non-finite answer)
+                // the dense system below decides.
+                if let Some(c) = cache.as_deref_mut().filter(|_| m >= STRUCTURED_MIN)
+                    && let Some(rows) = self.newton_rows(&it_ctx)
+                    && let Some((x, w_mu_new)) = c.solve_rows(&self.w, &rows, it == 1)
+                {
+                    let mut new_mu = vec![0.0; m];
+                    for (q, &u) in rows.unk.iter().enumerate() {
+                        new_mu[u] = x[q];
+                    }
+                    w_mu = Some(w_mu_new);
+                    break 'solve new_mu;
                 }
+                let NewtonSystem {
+                    a,
+                    b,
+                    unk,
+                    substituted,
+                    slip_lin,
+                } = self.newton_system(&it_ctx);
+                let nu = unk.len();
+                let x = match cache.as_deref_mut() {
+                    Some(c) => c.solve(&unk, &a, &b),
+                    None => {
+                        let lu = a.partial_piv_lu();
+                        let x = lu.solve(&b);
+                        if singular_pivots(&lu) { None } else { Some(x) }
+                    }
+                };
+                let bad = x
+                    .as_ref()
+                    .is_none_or(|x| (0..nu).any(|i| !x[(i, 0)].is_finite()));
+                if bad {
+                    if let Some(c) = cache.as_deref_mut() {
+                        c.clear();
+                    }
+                    return Err(ContactError::Singular(format!(
+                        "{} unknowns, {} in contact; a body may be free to move in a direction no contact or support holds",
+                        nu,
+                        status.iter().filter(|s| **s != Status::Open).count()
+                    )));
+                }
+                let x = x.expect("checked above");
+                let mut new_mu = vec![0.0; m];
+                for (q, &u) in unk.iter().enumerate() {
+                    new_mu[u] = x[(q, 0)];
+                }
+                for j in 0..ns {
+                    if substituted[j] && status[j] == Status::Slip {
+                        new_mu[ns + j] = sign[j] * slip_lin[j].0 * new_mu[j];
+                    }
+                }
+                new_mu
             };
-            let bad = x
-                .as_ref()
-                .is_none_or(|x| (0..nu).any(|i| !x[(i, 0)].is_finite()));
-            if bad {
-                if let Some(c) = cache.as_deref_mut() {
-                    c.clear();
-                }
-                return Err(ContactError::Singular(format!(
-                    "{} unknowns, {} in contact; a body may be free to move in a direction no contact or support holds",
-                    nu,
-                    status.iter().filter(|s| **s != Status::Open).count()
-                )));
-            }
-            let x = x.expect("checked above");
-            let mut new_mu = vec![0.0; m];
-            for (q, &u) in unk.iter().enumerate() {
-                new_mu[u] = x[(q, 0)];
-            }
-            for j in 0..ns {
-                if substituted[j] && status[j] == Status::Slip {
-                    new_mu[ns + j] = sign[j] * slip_lin[j].0 * new_mu[j];
-                }
-            }
             let scale = new_mu[..2 * ns]
                 .iter()
                 .fold(0.0f64, |a, v| a.max(v.abs()))
@@ -495,7 +543,7 @@ impl ContactSystem {
                     let dmu = law.dmu_du(u_k).unwrap_or(0.0);
                     let sigma = if dv_k != 0.0 { dv_k.signum() } else { -sign[j] };
                     slip_lin[j] = (law.mu(u_k), dmu, dv_k, sigma);
-                    substituted[j] = dmu == 0.0 || mu[j] == 0.0;
+                    substituted[j] = it.substitute && (dmu == 0.0 || mu[j] == 0.0);
                 }
             }
         }
@@ -718,6 +766,81 @@ impl ContactSystem {
         }
     }
 
+    /// The system of [`Self::newton_system`] for the Newton method, without substitution, in
+    /// structured form: normal, stick and displacement-driven anchor rows are rows of
+    /// `K = W[unk, unk]`; a slip row is `F_t − s μ_k F_n − coef (W μ)_t` and a force-driven
+    /// anchor row `z − k_g (W μ)_z`, i.e. `α e_r + β K_r + γ e_q`. `None` for the penalty and
+    /// augmented-Lagrangian methods (every normal row would be special) and for any other
+    /// pilot drive: the caller then assembles the dense system.
+    pub fn newton_rows(&self, it: &Iterate) -> Option<NewtonRows> {
+        if it.method != Method::Newton {
+            return None;
+        }
+        let ns = self.ns;
+        let (w0, prev, mu, status, sign) = (it.w0, it.prev, it.mu, it.status, it.sign);
+        let active: Vec<usize> = (0..ns).filter(|&j| status[j] != Status::Open).collect();
+        let mut unk = active.clone();
+        if it.law.is_some() {
+            unk.extend(active.iter().map(|&j| ns + j));
+        }
+        unk.extend((0..self.kg.len()).map(|k| 2 * ns + k));
+        let mut b = vec![0.0; unk.len()];
+        let mut special = Vec::new();
+        for (r, &u) in unk.iter().enumerate() {
+            if u < ns {
+                b[r] = -(self.gap0[u] + w0[u]);
+            } else if u < 2 * ns {
+                let j = u - ns;
+                match status[j] {
+                    Status::Stick => b[r] = prev.v[j] - w0[u],
+                    Status::Slip => {
+                        // As in `newton_system`: F_t − s μ_k F_n − s F_n,k μ'_k σ (Δv̂ − Δv̂_k) = 0.
+                        let law = it.law.expect("tangential unknowns only with friction");
+                        let dv_k = self.y_at(w0, mu, u) - prev.v[j];
+                        let u_k = prev.slip[j] + dv_k.abs();
+                        let dmu = law.dmu_du(u_k).unwrap_or(0.0);
+                        let sigma = if dv_k != 0.0 { dv_k.signum() } else { -sign[j] };
+                        let coef = sign[j] * mu[j] * dmu * sigma;
+                        special.push(SpecialRow {
+                            row: r,
+                            alpha: 1.0,
+                            beta: -coef,
+                            gamma: -sign[j] * law.mu(u_k),
+                            // The node's normal force: active nodes come first, in order.
+                            col: r - active.len(),
+                        });
+                        b[r] = coef * (w0[u] - prev.v[j] - dv_k);
+                    }
+                    Status::Open => unreachable!("open nodes have no unknowns"),
+                }
+            } else {
+                let k = u - 2 * ns;
+                let d = if self.has_pilot && k < 2 {
+                    it.drive[k]
+                } else {
+                    PilotDrive::Force(0.0)
+                };
+                #[allow(unreachable_patterns)]
+                match d {
+                    PilotDrive::Force(f) => {
+                        special.push(SpecialRow {
+                            row: r,
+                            alpha: 1.0,
+                            beta: -self.kg[k],
+                            gamma: 0.0,
+                            col: r,
+                        });
+                        b[r] = f + self.kg[k] * w0[u];
+                    }
+                    PilotDrive::Displacement(d) => b[r] = d - w0[u],
+                    // A drive added later without a structured row: the dense system.
+                    _ => return None,
+                }
+            }
+        }
+        Some(NewtonRows { unk, b, special })
+    }
+
     fn eps_h(&self, j: usize) -> f64 {
         // Penetration tolerance scale: w_j ≈ h_j / 3 … 2h_j / 3; eps_unit = E* w/h.
         self.eps_unit[j] / self.c * 1.0
@@ -794,24 +917,231 @@ fn singular_pivots(lu: &faer::linalg::solvers::PartialPivLu<f64>) -> bool {
     lo <= 1e-12 * hi
 }
 
-/// A dense LU kept across Newton iterations and load steps (see [`ContactSystem::solve_step`]).
+/// Factorisations kept across Newton iterations and load steps (see
+/// [`ContactSystem::solve_step`]).
+///
+/// The structured path ([`Self::solve_rows`]) keeps the Cholesky factor of a Delassus block
+/// `K = W[k_unk, k_unk]` and solves each Newton system `A x = b` whose matrix differs from `K`
+/// only in a few rows by the Sherman–Morrison–Woodbury identity; the dense path
+/// (`LuCache::solve`) keeps the LU of an earlier Newton matrix as a GMRES preconditioner.
 #[derive(Default)]
 pub struct LuCache {
+    /// Dense path: unknowns and LU of the last factorised Newton matrix.
     unk: Vec<usize>,
     lu: Option<faer::linalg::solvers::PartialPivLu<f64>>,
-    /// Factorisations done and GMRES iterations spent (for the run summary).
+    /// Structured path: unknowns (μ indices) of the factorised block `K`, the position in it
+    /// of each μ index (`usize::MAX`: not in it), its Cholesky factor (`K = Zᵀ Z` restricted to
+    /// the unknowns is symmetric positive definite), and the columns `K⁻¹ e_q` computed so far
+    /// by position `q` (empty: not yet).
+    k_unk: Vec<usize>,
+    k_pos: Vec<usize>,
+    k_llt: Option<faer::linalg::solvers::Llt<f64>>,
+    k_cols: Vec<Vec<f64>>,
+    /// Factorisations done (of `K` or of a dense Newton matrix) and GMRES iterations spent (for
+    /// the run summary).
     pub factorisations: usize,
     pub gmres_iterations: usize,
 }
+
+/// Contact systems with fewer candidate unknowns than this are solved through the dense Newton
+/// matrix even with a cache. There it costs microseconds, and such small systems are where the
+/// degenerate cases live (a few nodes touching at zero load, whose active sets are decided by
+/// the round-off in forces that are zero in exact arithmetic): the dense path keeps the
+/// rounding of the reference solve for them.
+const STRUCTURED_MIN: usize = 64;
 
 /// GMRES iterations before giving up on the cached factorisation and refactorising.
 const GMRES_MAX: usize = 12;
 
 impl LuCache {
-    /// Forgets the factorisation.
+    /// Forgets the factorisations.
     pub fn clear(&mut self) {
         self.lu = None;
         self.unk.clear();
+        self.k_llt = None;
+        self.k_unk.clear();
+        self.k_pos.clear();
+        self.k_cols.clear();
+    }
+
+    /// Solves the structured Newton system `rows` (see [`ContactSystem::newton_rows`]) with the
+    /// cached Cholesky factor of a Delassus block `K` whose unknowns include those of `rows`;
+    /// `w` is the whole Delassus operator. Returns the unknowns (ordered as `rows.unk`) and
+    /// `W μ` at the new iterate (all rows of `W`; on the system's own rows it is taken from the
+    /// equations, which saves most of a product with `W` per iteration). `None` if `K` or the
+    /// system is numerically singular, or the answer is not finite (the caller then assembles
+    /// the dense system, whose LU decides).
+    ///
+    /// Why: through a load history the contact set changes little, and the Newton matrix
+    /// differs from `K = W[unk, unk]` only in the rows of slip nodes and force-driven anchors
+    /// (`p` of them, `p ≪ n`). Unknowns of `K` that left the contact are more such rows
+    /// (`x_q = 0`), so `K` is refactorised only when a node outside it comes into contact or
+    /// too many of its unknowns have left. With `A = K + E_P B` (`E_P` the special rows'
+    /// unit vectors, `B = A_P − K_P`):
+    /// ```text
+    ///   x0 = K⁻¹ b,   G = K⁻¹ E_P,   C = I + B G = A_P G,   C y = B x0,   x = x0 − G y,
+    /// ```
+    /// where `A_P G` has the entries `α G_rj + γ G_qj + β δ_rj` (because `K G = E_P`) and
+    /// `B x0 = α x0_r + γ x0_q + (β − 1) b_r` (because `K x0 = b`). Each iteration costs one
+    /// solve with the cached factor and a `p × p` factorisation; the columns of `G` are kept
+    /// until `K` is refactorised, so a node that starts to slip costs one more solve, once.
+    ///
+    /// `new_step`: the first iteration of a load step. While the contact set settles within a
+    /// step, `K` is kept until a quarter of its unknowns have left; at the start of a step it
+    /// is refactorised for the current set once more than 1/64 have, since those rows would
+    /// otherwise enlarge the capacitance system of every iteration of the steps to come.
+    pub fn solve_rows(
+        &mut self,
+        w: &Mat<f64>,
+        rows: &NewtonRows,
+        new_step: bool,
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        let covered = self.k_llt.is_some()
+            && rows
+                .unk
+                .iter()
+                .all(|&u| self.k_pos.get(u).is_some_and(|&q| q != usize::MAX));
+        // Unknowns of K not in this system: each costs a special row (and a column of G).
+        let left = self.k_unk.len().saturating_sub(rows.unk.len());
+        let limit = self.k_unk.len() / if new_step { 64 } else { 4 };
+        if !covered || left > limit {
+            self.factorise_block(w, &rows.unk)?;
+        }
+        let nk = self.k_unk.len();
+        let mut b = vec![0.0; nk];
+        let mut in_system = vec![false; nk];
+        for (r, &u) in rows.unk.iter().enumerate() {
+            b[self.k_pos[u]] = rows.b[r];
+            in_system[self.k_pos[u]] = true;
+        }
+        let mut special: Vec<SpecialRow> = rows
+            .special
+            .iter()
+            .map(|s| SpecialRow {
+                row: self.k_pos[rows.unk[s.row]],
+                col: self.k_pos[rows.unk[s.col]],
+                ..*s
+            })
+            .collect();
+        special.extend((0..nk).filter(|&q| !in_system[q]).map(|q| SpecialRow {
+            row: q,
+            alpha: 1.0,
+            beta: 0.0,
+            gamma: 0.0,
+            col: q,
+        }));
+        let llt = self.k_llt.as_ref()?;
+        // Columns of G not computed yet, in one solve with several right-hand sides.
+        let missing: Vec<usize> = special
+            .iter()
+            .map(|s| s.row)
+            .filter(|&q| self.k_cols[q].is_empty())
+            .collect();
+        if !missing.is_empty() {
+            let mut e = Mat::<f64>::zeros(nk, missing.len());
+            for (c, &q) in missing.iter().enumerate() {
+                e[(q, c)] = 1.0;
+            }
+            llt.solve_in_place(&mut e);
+            for (c, &q) in missing.iter().enumerate() {
+                self.k_cols[q] = e.col(c).iter().copied().collect();
+            }
+        }
+        let mut x0 = Mat::from_fn(nk, 1, |i, _| b[i]);
+        llt.solve_in_place(&mut x0);
+        let mut x: Vec<f64> = x0.col(0).iter().copied().collect();
+        let p = special.len();
+        let mut y_cap = Vec::new();
+        if p > 0 {
+            let mut cap = Mat::<f64>::zeros(p, p);
+            let mut rhs = Mat::<f64>::zeros(p, 1);
+            // Size of the terms of each row: C is singular when A is, often by cancellation
+            // between large terms (a direction nothing holds), which its own pivots relative
+            // to each other do not show; relative to the terms they do.
+            let mut size = vec![0.0f64; p];
+            for (j, sj) in special.iter().enumerate() {
+                let g = &self.k_cols[sj.row];
+                for (i, si) in special.iter().enumerate() {
+                    let (t1, t2) = (si.alpha * g[si.row], si.gamma * g[si.col]);
+                    cap[(i, j)] = t1 + t2;
+                    size[i] = size[i].max(t1.abs() + t2.abs());
+                }
+                cap[(j, j)] += sj.beta;
+                rhs[(j, 0)] =
+                    sj.alpha * x[sj.row] + sj.gamma * x[sj.col] + (sj.beta - 1.0) * b[sj.row];
+            }
+            for (i, si) in special.iter().enumerate() {
+                let scale = 1.0 / (size[i] + si.beta.abs()).max(f64::MIN_POSITIVE);
+                for j in 0..p {
+                    cap[(i, j)] *= scale;
+                }
+                rhs[(i, 0)] *= scale;
+            }
+            let clu = cap.partial_piv_lu();
+            // Near-singular (gross sliding, a free direction): the dense system decides.
+            if (0..p).any(|i| clu.U()[(i, i)].abs() <= 1e-10) {
+                return None;
+            }
+            let y = clu.solve(&rhs);
+            y_cap = (0..p).map(|j| y[(j, 0)]).collect();
+            for (sj, yj) in special.iter().zip(&y_cap) {
+                for (xi, gi) in x.iter_mut().zip(&self.k_cols[sj.row]) {
+                    *xi -= gi * yj;
+                }
+            }
+        }
+        // W μ of the new iterate, for the next iteration's sets: on this system's rows it is
+        // what the rows impose, `K x = b − E_P y`, the others are products with W.
+        let mut w_mu = vec![0.0; w.nrows()];
+        let xs: Vec<f64> = rows.unk.iter().map(|&u| x[self.k_pos[u]]).collect();
+        let mut in_unk = vec![false; w.nrows()];
+        for &u in &rows.unk {
+            in_unk[u] = true;
+            w_mu[u] = b[self.k_pos[u]];
+        }
+        for (sj, yj) in special.iter().zip(&y_cap) {
+            let u = self.k_unk[sj.row];
+            if in_unk[u] {
+                w_mu[u] -= yj;
+            }
+        }
+        for (i, wi) in w_mu.iter_mut().enumerate() {
+            if !in_unk[i] {
+                let col = w.col(i);
+                *wi = rows.unk.iter().zip(&xs).map(|(&u, xu)| col[u] * xu).sum();
+            }
+        }
+        xs.iter().all(|v| v.is_finite()).then_some((xs, w_mu))
+    }
+
+    /// Factorises `K = W[unk, unk]` for [`Self::solve_rows`]; `None` if it is singular or not
+    /// numerically positive definite.
+    fn factorise_block(&mut self, w: &Mat<f64>, unk: &[usize]) -> Option<()> {
+        let k = Mat::from_fn(unk.len(), unk.len(), |i, j| w[(unk[i], unk[j])]);
+        let llt = k.llt(faer::Side::Lower).ok();
+        self.factorisations += 1;
+        self.k_llt = None;
+        self.k_unk.clear();
+        self.k_pos.clear();
+        self.k_cols.clear();
+        let llt = llt?;
+        // The pivots are L_ii²: as for an LU, singular when the smallest is below 1e-12 of the
+        // largest; and pivots within 2^52 of the smallest normal number have lost digits to
+        // underflow (absurd moduli make W that small).
+        let pivots: Vec<f64> = (0..unk.len()).map(|i| llt.L()[(i, i)].powi(2)).collect();
+        let lo = pivots.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = pivots.iter().copied().fold(0.0, f64::max);
+        if lo <= 1e-12 * hi || lo < f64::MIN_POSITIVE / f64::EPSILON {
+            return None;
+        }
+        self.k_pos = vec![usize::MAX; w.nrows()];
+        for (q, &u) in unk.iter().enumerate() {
+            self.k_pos[u] = q;
+        }
+        self.k_unk = unk.to_vec();
+        self.k_cols = vec![Vec::new(); unk.len()];
+        self.k_llt = Some(llt);
+        Some(())
     }
 
     /// Solves `A x = b` for the unknowns `unk`: by GMRES preconditioned with the cached LU when
