@@ -347,6 +347,12 @@ impl ContactSystem {
         let mut solved = false;
         // `W μ` of the current iterate when the last solve gave it.
         let mut w_mu: Option<Vec<f64>> = None;
+        // Iterations in a row with the sets settled and the update small but above the
+        // tolerance, and whether the structured solve has been given up for this step: its
+        // accuracy (a Woodbury update of a cached factor, `W μ` taken from the equations) can
+        // floor the update near 1e-8 on ill-conditioned systems (a steep μ′ with many slip
+        // nodes), where the dense LU still converges.
+        let (mut stalled, mut dense_only) = (0usize, false);
         for it in 1..=opt.max_iterations {
             let y = match w_mu.take() {
                 Some(w_mu) => w0.iter().zip(&w_mu).map(|(a, b)| a + b).collect(),
@@ -417,6 +423,19 @@ impl ContactSystem {
                         return Ok(self.finish(w0, &mu, &status, law, prev, it, last_update));
                     }
                 }
+                if changes == 0 && last_update < 1e-5 {
+                    stalled += 1;
+                    if stalled >= 2 && !dense_only {
+                        dense_only = true;
+                        if opt.verbose {
+                            eprintln!(
+                                "    the update stalls at {last_update:.2e}: solving the assembled system from here on"
+                            );
+                        }
+                    }
+                } else {
+                    stalled = 0;
+                }
                 if it == opt.max_iterations {
                     return Err(ContactError::NoConvergence {
                         iterations: it,
@@ -444,7 +463,9 @@ impl ContactSystem {
             let new_mu = 'solve: {
                 // The structured solve; on any trouble (a singular block, a non-finite answer)
                 // the dense system below decides.
-                if let Some(c) = cache.as_deref_mut().filter(|_| m >= STRUCTURED_MIN)
+                if let Some(c) = cache
+                    .as_deref_mut()
+                    .filter(|_| m >= STRUCTURED_MIN && !dense_only)
                     && let Some(rows) = self.newton_rows(&it_ctx)
                     && let Some((x, w_mu_new)) = c.solve_rows(&self.w, &rows, it == 1)
                 {
