@@ -1403,7 +1403,9 @@ pub fn bodies_vtu(model: &Model, u: &[f64], case: &Case) -> Result<Vec<u8>, vtki
 /// One row of a sweep: a friction law run on the shared model.
 #[derive(Clone, Debug, Serialize)]
 pub struct SweepRow {
+    /// Index of the friction law and of the load (stage list) in the sweep file.
     pub index: usize,
+    pub load_index: usize,
     pub status: String,
     pub steps: usize,
     pub newton_iterations: usize,
@@ -1416,14 +1418,22 @@ pub struct SweepRow {
     pub friction: Option<FrictionSummary>,
 }
 
-/// Runs the stages of `case` on one built model for each friction law, in parallel, and
-/// returns one row per law (in the order given). The model (assembly, factorisation,
-/// condensation, Delassus operator) is shared.
-pub fn sweep(model: &Model, case: &Case, laws: &[crate::friction::FrictionLaw]) -> Vec<SweepRow> {
+/// Runs each of `loads` (cases that differ from the model's in their stages only) with each
+/// friction law on one built model, in parallel, and returns one row per (load, law) pair,
+/// loads outermost, in the order given. The model (assembly, factorisation, condensation,
+/// Delassus operator) is shared: stages change only the loads, never the matrices.
+pub fn sweep(
+    model: &Model,
+    loads: &[Case],
+    laws: &[crate::friction::FrictionLaw],
+) -> Vec<SweepRow> {
     use rayon::prelude::*;
-    laws.par_iter()
-        .enumerate()
-        .map(|(index, law)| {
+    let jobs: Vec<(usize, usize)> = (0..loads.len())
+        .flat_map(|l| (0..laws.len()).map(move |i| (l, i)))
+        .collect();
+    jobs.par_iter()
+        .map(|&(load_index, index)| {
+            let (case, law) = (&loads[load_index], &laws[index]);
             let t = Instant::now();
             let res = simulate(model, case, Some(law), LogLevel::Error, &mut |_| Ok(()));
             let wall_s = t.elapsed().as_secs_f64();
@@ -1445,6 +1455,7 @@ pub fn sweep(model: &Model, case: &Case, laws: &[crate::friction::FrictionLaw]) 
                     };
                     SweepRow {
                         index,
+                        load_index,
                         status,
                         steps: sim.records.len(),
                         newton_iterations: sim.newton_iterations,
@@ -1457,6 +1468,7 @@ pub fn sweep(model: &Model, case: &Case, laws: &[crate::friction::FrictionLaw]) 
                 }
                 Err(e) => SweepRow {
                     index,
+                    load_index,
                     status: format!("error: {e}"),
                     steps: 0,
                     newton_iterations: 0,

@@ -1,17 +1,21 @@
-//! `stickslip sweep`: one case, many friction laws, one shared model, one table.
+//! `stickslip sweep`: one case, many friction laws and/or loads, one shared model, one table.
 
-use crate::case::{Case, FrictionSpec};
+use crate::case::{Case, FrictionSpec, Stage};
 use crate::model::Model;
 use crate::output;
 use crate::run::{self, SweepRow};
 use std::path::{Path, PathBuf};
 
-/// The sweep file.
+/// The sweep file: at least one of the two lists. The sweep runs every law with every load.
 #[derive(Debug, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SweepFile {
-    /// Friction laws, each as a case's `contact.friction`.
+    /// Friction laws, each as a case's `contact.friction`; absent or empty: the case's own law.
+    #[serde(default)]
     pub friction: Vec<FrictionSpec>,
+    /// Loads, each a whole replacement of the case's `stages`; absent or empty: the case's own.
+    #[serde(default)]
+    pub stages: Vec<Vec<Stage>>,
 }
 
 /// Runs a sweep from the command line. Errors carry the exit status.
@@ -37,16 +41,32 @@ pub fn run(
     })?;
     let file: SweepFile =
         serde_json::from_str(&text).map_err(|e| bad(format!("{}: {e}", sweep_path.display())))?;
-    if file.friction.is_empty() {
+    if file.friction.is_empty() && file.stages.is_empty() {
         return Err(bad(format!(
-            "{}: `friction` lists no law",
+            "{}: neither `friction` (laws) nor `stages` (loads) lists anything to sweep",
             sweep_path.display()
         )));
     }
+    // One case per load, each checked like a case file (ranges, pilot, slip control).
+    let loads = if file.stages.is_empty() {
+        vec![case.clone()]
+    } else {
+        file.stages
+            .iter()
+            .enumerate()
+            .map(|(i, st)| {
+                let mut c = case.clone();
+                c.stages = st.clone();
+                c.validate(&format!("{}: stages[{i}]", sweep_path.display()))
+                    .map(|()| c)
+                    .map_err(|e| bad(e.to_string()))
+            })
+            .collect::<Result<Vec<_>, _>>()?
+    };
     let t = std::time::Instant::now();
     let model = Model::build(&case, case_path).map_err(|e| bad(e.to_string()))?;
     let e_star = model.contact.as_ref().map(|c| c.e_star).expect("contact");
-    let laws = file
+    let mut laws = file
         .friction
         .iter()
         .enumerate()
@@ -55,9 +75,17 @@ pub fn run(
                 .map_err(|e| bad(format!("{}: friction[{i}]: {e}", sweep_path.display())))
         })
         .collect::<Result<Vec<_>, _>>()?;
+    if laws.is_empty() {
+        laws.push(model.friction.clone().ok_or_else(|| {
+            bad(format!(
+                "{}: the case has no friction law; list laws under `friction`",
+                case_path.display()
+            ))
+        })?);
+    }
     let build_s = t.elapsed().as_secs_f64();
     let t = std::time::Instant::now();
-    let rows = run::sweep(&model, &case, &laws);
+    let rows = run::sweep(&model, &loads, &laws);
     let sweep_s = t.elapsed().as_secs_f64();
     let out_dir = out.unwrap_or_else(|| {
         PathBuf::from("out").join(format!(
@@ -83,8 +111,9 @@ pub fn run(
     )?;
     if !quiet {
         eprintln!(
-            "{} laws on {} ({} triangles): model built in {build_s:.2} s, sweep {sweep_s:.2} s; table in {}",
+            "{} laws × {} loads on {} ({} triangles): model built in {build_s:.2} s, sweep {sweep_s:.2} s; table in {}",
             laws.len(),
+            loads.len(),
             case_path.display(),
             model.elems.len(),
             out_dir.join("sweep.csv").display()
@@ -96,14 +125,15 @@ pub fn run(
 /// The sweep table as CSV.
 pub fn table(rows: &[SweepRow]) -> String {
     let mut s = String::from(
-        "index,f_s,f_d,delta,lambda,chi,psi,load,q_max,apparent_friction,apparent_friction_jkr,apparent_friction_dcm,c,b,steps,newton_iterations,wall_s,resolved,status\n",
+        "index,load_index,f_s,f_d,delta,lambda,chi,psi,load,q_max,apparent_friction,apparent_friction_jkr,apparent_friction_dcm,c,b,steps,newton_iterations,wall_s,resolved,status\n",
     );
     let o = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.9e}"));
     for r in rows {
         let f = r.friction.as_ref();
         s += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{:.9e},{:.9e},{},{},{:.4},{},\"{}\"\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{:.9e},{:.9e},{},{},{:.4},{},\"{}\"\n",
             r.index,
+            r.load_index,
             o(f.map(|f| f.f_s)),
             o(f.and_then(|f| f.f_d)),
             o(f.and_then(|f| f.delta)),

@@ -69,3 +69,65 @@ fn sweep_reports_the_apparent_friction_of_each_law() {
     assert!(err.contains("bad.json"));
     assert!(!dir.join("o2").exists());
 }
+
+/// A load sweep (`stages`: one replacement stage list per load) with the case's own law:
+/// Cattaneo–Mindlin at four tangential loads on one model, each stick zone against
+/// c = a sqrt(1 − Q/(μP)) within one node spacing (L3, h/2 = 0.013 mm); rows come loads
+/// outermost. A sweep file with neither list is refused.
+#[test]
+fn sweep_over_loads_with_the_case_law() {
+    let v = shipped_case_on("vm272_cm.json", "vm272_L3.msh");
+    let dir = tempdir("sweep-loads");
+    std::fs::write(dir.join("case.json"), serde_json::to_string(&v).unwrap()).unwrap();
+    let normal = v["stages"][0].clone();
+    let qs: [f64; 4] = [0.5, 1.0, 1.5, 1.9];
+    let stages: Vec<Value> = qs
+        .iter()
+        .map(|q| json!([normal, {"steps": 10, "pilot_x": {"force": q}}]))
+        .collect();
+    std::fs::write(
+        dir.join("loads.json"),
+        json!({"stages": stages}).to_string(),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let (code, _, err) = stickslip(&[
+        "sweep",
+        dir.join("case.json").to_str().unwrap(),
+        dir.join("loads.json").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let table: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    let rows = table["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), qs.len());
+    let (mu, p, a): (f64, f64, f64) = (0.2, 10.0, 0.6808);
+    for (k, (r, q)) in rows.iter().zip(qs).enumerate() {
+        assert_eq!(r["load_index"].as_u64(), Some(k as u64));
+        assert_eq!(r["status"], "completed");
+        let c = r["c"].as_f64().unwrap();
+        let c_cm = a * (1.0 - q / (mu * p)).sqrt();
+        println!("Q = {q}: c = {c:.4} (C–M {c_cm:.4})");
+        assert!(
+            (c - c_cm).abs() < 0.6808 / 25.6 / 2.0,
+            "Q {q}: c {c} vs {c_cm}"
+        );
+    }
+    std::fs::write(dir.join("empty.json"), "{}").unwrap();
+    let (code, _, err) = stickslip(&[
+        "sweep",
+        dir.join("case.json").to_str().unwrap(),
+        dir.join("empty.json").to_str().unwrap(),
+        "--out",
+        dir.join("o3").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("empty.json") && err.contains("anything to sweep"),
+        "{err}"
+    );
+    assert!(!dir.join("o3").exists());
+}
