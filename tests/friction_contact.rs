@@ -524,4 +524,39 @@ fn structured_newton_solve_matches_the_dense_system() {
         cache.factorisations, 1,
         "the second system reuses the block"
     );
+    // Slip control: the pilot's x row is a weighted sum of the tangential rows of the nodes in
+    // contact (a `combo` row), solved through the same block.
+    let status = st.status.clone();
+    let it = Iterate {
+        w0: &w0,
+        drive: [
+            PilotDrive::Slip(prev.mean_slip + 1e-4),
+            PilotDrive::Force(-10.0),
+        ],
+        law: Some(&law),
+        substitute: false,
+        prev: &prev,
+        mu: &mu,
+        status: &status,
+        sign: &sign,
+        method: Method::Newton,
+        eps: &zeros,
+        fbar_n: &zeros,
+        fbar_t: &zeros,
+    };
+    let sys = cm.system.newton_system(&it);
+    let rows = cm.system.newton_rows(&it).unwrap();
+    assert_eq!(rows.unk, sys.unk);
+    assert!(rows.special.iter().any(|r| !r.combo.is_empty()));
+    let (x, _) = LuCache::default()
+        .solve_rows(&cm.system.w, &rows, true)
+        .unwrap();
+    let dense = faer::linalg::solvers::Solve::solve(&sys.a.partial_piv_lu(), &sys.b);
+    let xmax = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let diff = (0..x.len())
+        .map(|i| (x[i] - dense[(i, 0)]).abs())
+        .fold(0.0, f64::max)
+        / xmax;
+    println!("slip control: |x − x_dense|/|x| = {diff:.2e}");
+    assert!(diff < 1e-10, "slip control: {diff:e}");
 }

@@ -147,14 +147,17 @@ pub struct NewtonRows {
     pub special: Vec<SpecialRow>,
 }
 
-/// Row `row` of a [`NewtonRows`] matrix: `α e_row + β K_row + γ e_col`.
-#[derive(Clone, Copy, Debug)]
+/// Row `row` of a [`NewtonRows`] matrix: `α e_row + β K_row + γ e_col`, or, when `combo` is
+/// not empty, `α e_row + Σ c K_t + γ e_col` over its `(t, c)` (β unused): the slip-control
+/// row, a weighted sum of the tangential rows of the nodes in contact.
+#[derive(Clone, Debug)]
 pub struct SpecialRow {
     pub row: usize,
     pub alpha: f64,
     pub beta: f64,
     pub gamma: f64,
     pub col: usize,
+    pub combo: Vec<(usize, f64)>,
 }
 
 /// The condensed contact operator.
@@ -829,6 +832,7 @@ impl ContactSystem {
                             gamma: -sign[j] * law.mu(u_k),
                             // The node's normal force: active nodes come first, in order.
                             col: r - active.len(),
+                            combo: Vec::new(),
                         });
                         b[r] = coef * (w0[u] - prev.v[j] - dv_k);
                     }
@@ -850,10 +854,36 @@ impl ContactSystem {
                             beta: -self.kg[k],
                             gamma: 0.0,
                             col: r,
+                            combo: Vec::new(),
                         });
                         b[r] = f + self.kg[k] * w0[u];
                     }
                     PilotDrive::Displacement(d) => b[r] = d - w0[u],
+                    PilotDrive::Slip(target) => {
+                        // As in `newton_system`: Σ ω_j (W μ)_t,j = target − mean slip − Σ ω_j
+                        // (w0_t,j − v̂_j,old), over the nodes in contact at the last step; each
+                        // of their tangential forces must be an unknown here.
+                        it.law?;
+                        let omega = self.slip_weights(prev);
+                        let mut combo = Vec::new();
+                        let mut rhs = target - prev.mean_slip;
+                        for (j, &o) in omega.iter().enumerate() {
+                            if o != 0.0 {
+                                let t = active.binary_search(&j).ok()? + active.len();
+                                combo.push((t, o));
+                                rhs -= o * (w0[ns + j] - prev.v[j]);
+                            }
+                        }
+                        special.push(SpecialRow {
+                            row: r,
+                            alpha: 0.0,
+                            beta: 0.0,
+                            gamma: 0.0,
+                            col: r,
+                            combo,
+                        });
+                        b[r] = rhs;
+                    }
                     // A drive added later without a structured row: the dense system.
                     _ => return None,
                 }
@@ -1041,6 +1071,11 @@ impl LuCache {
             .map(|s| SpecialRow {
                 row: self.k_pos[rows.unk[s.row]],
                 col: self.k_pos[rows.unk[s.col]],
+                combo: s
+                    .combo
+                    .iter()
+                    .map(|&(t, c)| (self.k_pos[rows.unk[t]], c))
+                    .collect(),
                 ..*s
             })
             .collect();
@@ -1050,6 +1085,7 @@ impl LuCache {
             beta: 0.0,
             gamma: 0.0,
             col: q,
+            combo: Vec::new(),
         }));
         let llt = self.k_llt.as_ref()?;
         // Columns of G not computed yet, in one solve with several right-hand sides.
@@ -1075,6 +1111,11 @@ impl LuCache {
         let mut y_cap = Vec::new();
         if p > 0 {
             let mut cap = Mat::<f64>::zeros(p, p);
+            // Index in `special` of each row of K that is special.
+            let mut special_at = vec![None; nk];
+            for (i, si) in special.iter().enumerate() {
+                special_at[si.row] = Some(i);
+            }
             let mut rhs = Mat::<f64>::zeros(p, 1);
             // Size of the terms of each row: C is singular when A is, often by cancellation
             // between large terms (a direction nothing holds), which its own pivots relative
@@ -1087,12 +1128,30 @@ impl LuCache {
                     cap[(i, j)] = t1 + t2;
                     size[i] = size[i].max(t1.abs() + t2.abs());
                 }
-                cap[(j, j)] += sj.beta;
-                rhs[(j, 0)] =
-                    sj.alpha * x[sj.row] + sj.gamma * x[sj.col] + (sj.beta - 1.0) * b[sj.row];
+                if sj.combo.is_empty() {
+                    cap[(j, j)] += sj.beta;
+                    rhs[(j, 0)] =
+                        sj.alpha * x[sj.row] + sj.gamma * x[sj.col] + (sj.beta - 1.0) * b[sj.row];
+                } else {
+                    // Σ c K_t G = Σ c (E_P)_t: unit entries where t is a special row.
+                    for &(t, c) in &sj.combo {
+                        if let Some(i) = special_at[t] {
+                            cap[(j, i)] += c;
+                        }
+                    }
+                    rhs[(j, 0)] = sj.alpha * x[sj.row]
+                        + sj.gamma * x[sj.col]
+                        + sj.combo.iter().map(|&(t, c)| c * b[t]).sum::<f64>()
+                        - b[sj.row];
+                }
             }
             for (i, si) in special.iter().enumerate() {
-                let scale = 1.0 / (size[i] + si.beta.abs()).max(f64::MIN_POSITIVE);
+                let k_part = if si.combo.is_empty() {
+                    si.beta.abs()
+                } else {
+                    si.combo.iter().map(|(_, c)| c.abs()).sum()
+                };
+                let scale = 1.0 / (size[i] + k_part).max(f64::MIN_POSITIVE);
                 for j in 0..p {
                     cap[(i, j)] *= scale;
                 }
