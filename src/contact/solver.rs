@@ -356,6 +356,10 @@ impl ContactSystem {
         // floor the update near 1e-8 on ill-conditioned systems (a steep μ′ with many slip
         // nodes), where the dense LU still converges.
         let (mut stalled, mut dense_only) = (0usize, false);
+        // Iterations in a row with the sets fixed and the update not contracting (Newton
+        // cycling across a kink of μ(u), e.g. the end of a ramp, where μ′ jumps), and the
+        // relaxation applied to the update once that is detected.
+        let (mut cycling, mut relax, mut prev_update) = (0usize, 1.0f64, f64::INFINITY);
         for it in 1..=opt.max_iterations {
             let y = match w_mu.take() {
                 Some(w_mu) => w0.iter().zip(&w_mu).map(|(a, b)| a + b).collect(),
@@ -426,6 +430,20 @@ impl ContactSystem {
                         return Ok(self.finish(w0, &mu, &status, law, prev, it, last_update));
                     }
                 }
+                if changes == 0 && last_update > 1e-5 && last_update >= 0.5 * prev_update {
+                    cycling += 1;
+                    if cycling >= 3 && relax == 1.0 {
+                        relax = 0.5;
+                        if opt.verbose {
+                            eprintln!(
+                                "    the update does not contract ({last_update:.2e}): halving the steps from here on"
+                            );
+                        }
+                    }
+                } else {
+                    cycling = 0;
+                }
+                prev_update = last_update;
                 if changes == 0 && last_update < 1e-5 {
                     stalled += 1;
                     if stalled >= 2 && !dense_only {
@@ -518,6 +536,16 @@ impl ContactSystem {
                         new_mu[ns + j] = sign[j] * slip_lin[j].0 * new_mu[j];
                     }
                 }
+                new_mu
+            };
+            let new_mu: Vec<f64> = if relax < 1.0 {
+                // `W μ` from the solve belongs to the full step: recompute it.
+                w_mu = None;
+                mu.iter()
+                    .zip(&new_mu)
+                    .map(|(o, n)| o + relax * (n - o))
+                    .collect()
+            } else {
                 new_mu
             };
             let scale = new_mu[..2 * ns]
