@@ -60,18 +60,7 @@ fn main() {
             for steps in [5, 20, 80] {
                 for level in [2, 3, 4] {
                     let h = a / (3.2 * 2f64.powi(level));
-                    let mut v: Value = serde_json::from_str(
-                        &std::fs::read_to_string(repo.join("cases/fig2.json")).unwrap(),
-                    )
-                    .unwrap();
-                    v["mesh"] = json!(
-                        repo.join(format!("meshes/vm272_L{level}.msh"))
-                            .to_str()
-                            .unwrap()
-                    );
-                    v["output"] = json!({"vtu": false});
-                    v["contact"]["method"] = json!(method);
-                    v["contact"]["friction"]["shape"] = json!(shape);
+                    let mut v = fig2_variant(&repo, level, method, shape);
                     v["stages"][1]["steps"] = json!(steps);
                     let name = format!("{method}_{shape}_{steps}_L{level}");
                     let (ok, _, s) = common::run_case(&v, &name, &tmp, &threads);
@@ -120,6 +109,23 @@ fn main() {
     let _ = std::fs::remove_dir_all(&tmp);
 }
 
+/// `cases/fig2.json` on VM272 level `level` with the contact method and law shape given, without
+/// VTK output.
+fn fig2_variant(repo: &std::path::Path, level: i32, method: &str, shape: &str) -> Value {
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(repo.join("cases/fig2.json")).unwrap())
+            .unwrap();
+    v["mesh"] = json!(
+        repo.join(format!("meshes/vm272_L{level}.msh"))
+            .to_str()
+            .unwrap()
+    );
+    v["output"] = json!({"vtu": false});
+    v["contact"]["method"] = json!(method);
+    v["contact"]["friction"]["shape"] = json!(shape);
+    v
+}
+
 /// Through the peak: method × shape × control on Fig. 2's law. Force control ramps Q to
 /// 1.2 f_d P (past Q_max: the run must end with exit status 5 and Q_max bracketed); slip
 /// control drives the mean slip to 2.72e-3 mm (past the peak, before the stick zone vanishes on
@@ -141,18 +147,7 @@ fn peak_study(repo: &std::path::Path, tmp: &std::path::Path, threads: &str) {
         for shape in ["step", "ramp", "exponential"] {
             for control in ["force", "slip"] {
                 for level in [3, 4] {
-                    let mut v: Value = serde_json::from_str(
-                        &std::fs::read_to_string(repo.join("cases/fig2.json")).unwrap(),
-                    )
-                    .unwrap();
-                    v["mesh"] = json!(
-                        repo.join(format!("meshes/vm272_L{level}.msh"))
-                            .to_str()
-                            .unwrap()
-                    );
-                    v["output"] = json!({"vtu": false});
-                    v["contact"]["method"] = json!(method);
-                    v["contact"]["friction"]["shape"] = json!(shape);
+                    let mut v = fig2_variant(repo, level, method, shape);
                     v["stages"][1] = if control == "force" {
                         json!({"steps": 40, "pilot_x": {"force": 1.2}})
                     } else {

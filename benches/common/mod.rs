@@ -5,6 +5,38 @@ use serde_json::Value;
 use std::path::Path;
 use std::process::Command;
 
+/// Runs `stickslip SUBCOMMAND INPUTS… --out OUT --quiet --threads T`, timing the process, and
+/// returns whether it succeeded, its wall time and the JSON file `OUT/result` (`Value::Null`
+/// if none was written).
+fn run_timed(
+    subcommand: &str,
+    inputs: &[&Path],
+    out: &Path,
+    threads: &str,
+    result: &str,
+) -> (bool, f64, Value) {
+    let mut args = vec![subcommand];
+    args.extend(inputs.iter().map(|p| p.to_str().expect("utf-8 path")));
+    args.extend([
+        "--out",
+        out.to_str().expect("utf-8 path"),
+        "--quiet",
+        "--threads",
+        threads,
+    ]);
+    let t = std::time::Instant::now();
+    let st = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args(&args)
+        .status()
+        .expect("the stickslip binary runs");
+    let wall = t.elapsed().as_secs_f64();
+    let json = std::fs::read_to_string(out.join(result))
+        .ok()
+        .and_then(|s| serde_json::from_str(&s).ok())
+        .unwrap_or(Value::Null);
+    (st.success(), wall, json)
+}
+
 /// Writes `case` to `dir/name.json`, runs it into `dir/name/` with `--quiet --threads T`, and
 /// returns whether it exited successfully, the wall time of the process and its `summary.json`
 /// (`Value::Null` if none was written).
@@ -12,26 +44,7 @@ pub fn run_case(case: &Value, name: &str, dir: &Path, threads: &str) -> (bool, f
     let path = dir.join(format!("{name}.json"));
     std::fs::write(&path, serde_json::to_string(case).expect("serialisable"))
         .expect("writable temp dir");
-    let out = dir.join(name);
-    let t = std::time::Instant::now();
-    let st = Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args([
-            "run",
-            path.to_str().expect("utf-8 path"),
-            "--out",
-            out.to_str().expect("utf-8 path"),
-            "--quiet",
-            "--threads",
-            threads,
-        ])
-        .status()
-        .expect("the stickslip binary runs");
-    let wall = t.elapsed().as_secs_f64();
-    let summary = std::fs::read_to_string(out.join("summary.json"))
-        .ok()
-        .and_then(|s| serde_json::from_str(&s).ok())
-        .unwrap_or(Value::Null);
-    (st.success(), wall, summary)
+    run_timed("run", &[&path], &dir.join(name), threads, "summary.json")
 }
 
 /// Writes `case` to `dir/name.json` and `{"friction": laws}` to `dir/name_sweep.json`, runs
@@ -52,24 +65,5 @@ pub fn run_sweep(
     std::fs::write(&sweep, serde_json::json!({ "friction": laws }).to_string())
         .expect("writable temp dir");
     let out = dir.join(format!("{name}_sweep"));
-    let t = std::time::Instant::now();
-    let st = Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args([
-            "sweep",
-            path.to_str().expect("utf-8 path"),
-            sweep.to_str().expect("utf-8 path"),
-            "--out",
-            out.to_str().expect("utf-8 path"),
-            "--quiet",
-            "--threads",
-            threads,
-        ])
-        .status()
-        .expect("the stickslip binary runs");
-    let wall = t.elapsed().as_secs_f64();
-    let table = std::fs::read_to_string(out.join("sweep.json"))
-        .ok()
-        .and_then(|s| serde_json::from_str(&s).ok())
-        .unwrap_or(Value::Null);
-    (st.success(), wall, table)
+    run_timed("sweep", &[&path, &sweep], &out, threads, "sweep.json")
 }

@@ -697,11 +697,7 @@ impl ContactSystem {
                 }
             } else {
                 let k = u - 2 * ns;
-                let d = if self.has_pilot && k < 2 {
-                    drive[k]
-                } else {
-                    PilotDrive::Force(0.0)
-                };
+                let d = self.anchor_drive(drive, k);
                 match d {
                     PilotDrive::Force(f) => {
                         a[(r, r)] += 1.0;
@@ -768,11 +764,7 @@ impl ContactSystem {
                     }
                 } else {
                     let k = u - 2 * ns;
-                    let d = if self.has_pilot && k < 2 {
-                        it.drive[k]
-                    } else {
-                        PilotDrive::Force(0.0)
-                    };
+                    let d = self.anchor_drive(it.drive, k);
                     match d {
                         PilotDrive::Force(f) => mu[u] - self.kg[k] * y[u] - f,
                         PilotDrive::Displacement(d) => y[u] - d,
@@ -868,11 +860,7 @@ impl ContactSystem {
                 }
             } else {
                 let k = u - 2 * ns;
-                let d = if self.has_pilot && k < 2 {
-                    it.drive[k]
-                } else {
-                    PilotDrive::Force(0.0)
-                };
+                let d = self.anchor_drive(it.drive, k);
                 #[allow(unreachable_patterns)]
                 match d {
                     PilotDrive::Force(f) => {
@@ -918,6 +906,16 @@ impl ContactSystem {
             }
         }
         Some(NewtonRows { unk, b, special })
+    }
+
+    /// How anchor `k` is driven: the pilot's components by `drive`, every other anchor (DOFs of
+    /// a body held by contact alone) at zero force.
+    fn anchor_drive(&self, drive: [PilotDrive; 2], k: usize) -> PilotDrive {
+        if self.has_pilot && k < 2 {
+            drive[k]
+        } else {
+            PilotDrive::Force(0.0)
+        }
     }
 
     fn eps_h(&self, j: usize) -> f64 {
