@@ -29,10 +29,10 @@ impl UpperCsc {
             for a in d {
                 let Dof::Free(c) = a else { continue };
                 for b in d {
-                    if let Dof::Free(r) = b {
-                        if r <= c {
-                            cols[c].push(r);
-                        }
+                    if let Dof::Free(r) = b
+                        && r <= c
+                    {
+                        cols[c].push(r);
                     }
                 }
             }

@@ -558,24 +558,24 @@ impl Case {
                 ("candidate_gap", c.candidate_gap),
                 ("tolerance", c.tolerance),
             ] {
-                if let Some(v) = v {
-                    if !(v > 0.0 && v.is_finite()) {
-                        return Err(bad(
-                            format!("contact.{k}"),
-                            format!("{v}"),
-                            "must be > 0 and finite",
-                        ));
-                    }
-                }
-            }
-            if let Some(n) = c.max_iterations {
-                if n == 0 || n > 10_000 {
+                if let Some(v) = v
+                    && !(v > 0.0 && v.is_finite())
+                {
                     return Err(bad(
-                        "contact.max_iterations".into(),
-                        format!("{n}"),
-                        "must be between 1 and 10000",
+                        format!("contact.{k}"),
+                        format!("{v}"),
+                        "must be > 0 and finite",
                     ));
                 }
+            }
+            if let Some(n) = c.max_iterations
+                && (n == 0 || n > 10_000)
+            {
+                return Err(bad(
+                    "contact.max_iterations".into(),
+                    format!("{n}"),
+                    "must be between 1 and 10000",
+                ));
             }
         }
         if self.output.every == 0 {

@@ -325,16 +325,8 @@ impl Model {
                 xs[j1]
             }
         };
-        let left = if lo + 1 <= hi {
-            edge(lo, lo + 1)
-        } else {
-            xs[lo]
-        };
-        let right = if hi >= lo + 1 {
-            edge(hi, hi - 1)
-        } else {
-            xs[hi]
-        };
+        let left = if lo < hi { edge(lo, lo + 1) } else { xs[lo] };
+        let right = if hi > lo { edge(hi, hi - 1) } else { xs[hi] };
         // The face may run in −x (a slave on the upper body): widths are absolute.
         fig.a = 0.5 * (right - left).abs();
         fig.x_centre = 0.5 * (right + left);
@@ -357,15 +349,14 @@ impl Model {
             0.5 * (r - l).abs()
         };
         fig.c = half_width(&|j| st.status[j] == Status::Stick);
-        if let Some(law) = law {
-            if let Ok(fd) = law.f_dynamic() {
-                let fs = law.f_static();
-                if fs > fd {
-                    let tol = 1e-9 * (fs - fd);
-                    fig.b = half_width(&|j| {
-                        st.status[j] != Status::Open && law.mu(st.slip[j]) > fd + tol
-                    });
-                }
+        if let Some(law) = law
+            && let Ok(fd) = law.f_dynamic()
+        {
+            let fs = law.f_static();
+            if fs > fd {
+                let tol = 1e-9 * (fs - fd);
+                fig.b =
+                    half_width(&|j| st.status[j] != Status::Open && law.mu(st.slip[j]) > fd + tol);
             }
         }
         fig
@@ -884,7 +875,7 @@ pub fn run_model(
         if !case.output.vtu {
             return Ok(());
         }
-        if ev.step % case.output.every == 0 || ev.last {
+        if ev.step.is_multiple_of(case.output.every) || ev.last {
             unwritten = None;
             write_step(ev.step, ev.time, ev.scale, ev.u, ev.contact)
         } else {
@@ -899,10 +890,10 @@ pub fn run_model(
             Ok(())
         }
     })?;
-    if let Some((step, time, scale, u, st)) = unwritten.take() {
-        if sim.failure.is_some() {
-            write_step(step, time, scale, u.as_ref(), st.as_ref())?;
-        }
+    if let Some((step, time, scale, u, st)) = unwritten.take()
+        && sim.failure.is_some()
+    {
+        write_step(step, time, scale, u.as_ref(), st.as_ref())?;
     }
     drop(write_step);
     let Simulation {
@@ -1025,14 +1016,15 @@ pub fn run_model(
             .expect("serialisable")
             .as_bytes(),
     )?;
-    if let Some(fr) = &summary.friction {
-        if fr.resolved == Some(false) && level >= LogLevel::Warn {
-            eprintln!(
-                "warning: the contact elements (h = {:.3e}) are larger than s0/2 = {:.3e}: the slip-weakening transition zone is not resolved; use a finer mesh along the faces",
-                fr.h_contact,
-                fr.s0_over_a.unwrap_or(0.0) * fr.a_hertz / 2.0
-            );
-        }
+    if let Some(fr) = &summary.friction
+        && fr.resolved == Some(false)
+        && level >= LogLevel::Warn
+    {
+        eprintln!(
+            "warning: the contact elements (h = {:.3e}) are larger than s0/2 = {:.3e}: the slip-weakening transition zone is not resolved; use a finer mesh along the faces",
+            fr.h_contact,
+            fr.s0_over_a.unwrap_or(0.0) * fr.a_hertz / 2.0
+        );
     }
     if level >= LogLevel::Info {
         eprint!("{}", end_summary(case_path, &summary, out_dir, &stem));

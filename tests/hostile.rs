@@ -445,17 +445,17 @@ fn case_target(b: &[u8]) -> bool {
     let ok = case.validate("x").is_ok();
     let _ = case.total_steps();
     let _ = case.mesh_path(Path::new("cases/x.json"));
-    if let Some(c) = &case.contact {
-        if let Some(f) = &c.friction {
-            for e_star in [109.89, 0.0, -1.0, f64::MIN_POSITIVE, 1e300] {
-                if let Ok(law) = f.resolve(e_star) {
-                    for u in [0.0, 1e-9, 1e-3, 1.0, 1e300, -1.0, f64::NAN] {
-                        let _ = law.mu(u);
-                        let _ = law.dmu_du(u);
-                    }
-                    let _ = law.f_static();
-                    let _ = law.f_dynamic();
+    if let Some(c) = &case.contact
+        && let Some(f) = &c.friction
+    {
+        for e_star in [109.89, 0.0, -1.0, f64::MIN_POSITIVE, 1e300] {
+            if let Ok(law) = f.resolve(e_star) {
+                for u in [0.0, 1e-9, 1e-3, 1.0, 1e300, -1.0, f64::NAN] {
+                    let _ = law.mu(u);
+                    let _ = law.dmu_du(u);
                 }
+                let _ = law.f_static();
+                let _ = law.f_dynamic();
             }
         }
     }
@@ -539,10 +539,10 @@ fn mutate_case(rng: &mut Rng, v: &mut Value, nasty: &[Value]) -> String {
                         m.remove(last);
                     }
                     Value::Array(a) => {
-                        if let Ok(i) = last.parse::<usize>() {
-                            if i < a.len() {
-                                a.remove(i);
-                            }
+                        if let Ok(i) = last.parse::<usize>()
+                            && i < a.len()
+                        {
+                            a.remove(i);
                         }
                     }
                     _ => {}
@@ -552,11 +552,11 @@ fn mutate_case(rng: &mut Rng, v: &mut Value, nasty: &[Value]) -> String {
         }
         _ => {
             // Duplicate an array element (e.g. a second body, stage or support).
-            if let Some(Value::Array(a)) = v.pointer_mut(&p) {
-                if !a.is_empty() {
-                    let x = a[0].clone();
-                    a.push(x);
-                }
+            if let Some(Value::Array(a)) = v.pointer_mut(&p)
+                && !a.is_empty()
+            {
+                let x = a[0].clone();
+                a.push(x);
             }
             format!("duplicate first element of {p}")
         }

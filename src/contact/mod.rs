@@ -100,13 +100,12 @@ fn point_gap(
     let mut best: Option<f64> = None;
     for e in master {
         let xm = e.map(|k| mesh.nodes[k]);
-        if let Some((r, g)) = mortar::project_along(&xm, x, n) {
-            if (-1.0 - 1e-9..=1.0 + 1e-9).contains(&r)
-                && g.abs() <= reach
-                && best.is_none_or(|b| g.abs() < b.abs())
-            {
-                best = Some(g);
-            }
+        if let Some((r, g)) = mortar::project_along(&xm, x, n)
+            && (-1.0 - 1e-9..=1.0 + 1e-9).contains(&r)
+            && g.abs() <= reach
+            && best.is_none_or(|b| g.abs() < b.abs())
+        {
+            best = Some(g);
         }
     }
     best
@@ -323,10 +322,10 @@ impl ContactModel {
         let mut master_dof = vec![false; n_r];
         for &node in &m0.master_nodes {
             for c in 0..2 {
-                if let Dof::Free(i) = dofs.node[node][c] {
-                    if i >= n_i {
-                        master_dof[i - n_i] = true;
-                    }
+                if let Dof::Free(i) = dofs.node[node][c]
+                    && i >= n_i
+                {
+                    master_dof[i - n_i] = true;
                 }
             }
         }

@@ -1254,13 +1254,12 @@ impl LuCache {
     /// it is for the same unknowns, else (or if GMRES stalls) with a new LU, which is kept.
     /// `None` when the system is singular.
     fn solve(&mut self, unk: &[usize], a: &Mat<f64>, b: &Mat<f64>) -> Option<Mat<f64>> {
-        if self.unk == unk {
-            if let Some(lu) = &self.lu {
-                if let Some((x, its)) = gmres(a, b, lu, 1e-13, GMRES_MAX) {
-                    self.gmres_iterations += its;
-                    return Some(x);
-                }
-            }
+        if self.unk == unk
+            && let Some(lu) = &self.lu
+            && let Some((x, its)) = gmres(a, b, lu, 1e-13, GMRES_MAX)
+        {
+            self.gmres_iterations += its;
+            return Some(x);
         }
         let lu = a.partial_piv_lu();
         self.factorisations += 1;

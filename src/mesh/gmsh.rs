@@ -71,15 +71,15 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
     }
     // mshio panics on a data size other than 1, 2, 4, 8, 16 or one that overflows; gmsh writes
     // sizeof(size_t), and the node-tag pass below reads 4 or 8.
-    if let Some(size) = header_data_size(bytes) {
-        if !matches!(size.parse::<u64>(), Ok(4 | 8)) {
-            return Err(MeshReadError::Parse {
-                path: p,
-                detail: format!(
-                    "the $MeshFormat data size is `{size}`; it must be 4 or 8 (sizeof(size_t))"
-                ),
-            });
-        }
+    if let Some(size) = header_data_size(bytes)
+        && !matches!(size.parse::<u64>(), Ok(4 | 8))
+    {
+        return Err(MeshReadError::Parse {
+            path: p,
+            detail: format!(
+                "the $MeshFormat data size is `{size}`; it must be 4 or 8 (sizeof(size_t))"
+            ),
+        });
     }
     let names = physical_names(bytes, &p)?;
     let msh = mshio::parse_msh_bytes(bytes).map_err(|e| MeshReadError::Parse {
