@@ -280,22 +280,8 @@ fn newton_jacobian_matches_finite_differences() {
         // a higher load, so that transition nodes have Δv ≠ 0 and μ' ≠ 0.
         let next = step(0.7, &st);
         let ns = cm.system.ns;
-        let mut mu: Vec<f64> = next
-            .f_n
-            .iter()
-            .chain(&next.f_t)
-            .chain(&next.z)
-            .copied()
-            .collect();
         // Move off the solution a little so that the residual is not zero.
-        for (k, m) in mu.iter_mut().enumerate() {
-            *m *= 1.0 + 1e-3 * ((k % 7) as f64 - 3.0);
-        }
-        let sign: Vec<f64> = next
-            .f_t
-            .iter()
-            .map(|f| if *f < 0.0 { -1.0 } else { 1.0 })
-            .collect();
+        let (mu, sign) = off_solution(&next);
         let w0 = vec![0.0; mu.len()];
         let eps = vec![0.0; ns];
         let zeros = vec![0.0; ns];
@@ -442,15 +428,7 @@ fn structured_newton_solve_matches_the_dense_system() {
     }
     let ns = cm.system.ns;
     // An iterate off the solution, so that slip rows have μ' ≠ 0 and Δv ≠ 0.
-    let mut mu: Vec<f64> = st.f_n.iter().chain(&st.f_t).chain(&st.z).copied().collect();
-    for (k, m) in mu.iter_mut().enumerate() {
-        *m *= 1.0 + 1e-3 * ((k % 7) as f64 - 3.0);
-    }
-    let sign: Vec<f64> = st
-        .f_t
-        .iter()
-        .map(|f| if *f < 0.0 { -1.0 } else { 1.0 })
-        .collect();
+    let (mu, sign) = off_solution(&st);
     let w0 = vec![0.0; mu.len()];
     let zeros = vec![0.0; ns];
     let mut prev = st.clone();
@@ -546,4 +524,19 @@ fn structured_newton_solve_matches_the_dense_system() {
         cache.factorisations, 1,
         "the second and third systems reuse the block"
     );
+}
+
+/// The forces μ = (F_n, F_t, z) of a converged state, each scaled by 1 + 1e-3·(k mod 7 − 3) so
+/// that the iterate is off the solution, and the slip signs of its tangential forces.
+fn off_solution(st: &stickslip::contact::solver::State) -> (Vec<f64>, Vec<f64>) {
+    let mut mu: Vec<f64> = st.f_n.iter().chain(&st.f_t).chain(&st.z).copied().collect();
+    for (k, m) in mu.iter_mut().enumerate() {
+        *m *= 1.0 + 1e-3 * ((k % 7) as f64 - 3.0);
+    }
+    let sign = st
+        .f_t
+        .iter()
+        .map(|f| if *f < 0.0 { -1.0 } else { 1.0 })
+        .collect();
+    (mu, sign)
 }
