@@ -30,6 +30,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
+#[path = "common/mod.rs"]
+mod common;
+use common::analytic;
+
 const MU: f64 = 0.2;
 const Q_CM: f64 = 0.936;
 const FD: f64 = 0.1;
@@ -276,16 +280,6 @@ fn parse_levels(s: &str) -> Vec<usize> {
         .filter(|t| !t.trim().is_empty())
         .map(|t| t.trim().parse().unwrap())
         .collect()
-}
-
-fn analytic(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .arg("analytic")
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "stickslip analytic {args:?} failed");
-    String::from_utf8(out.stdout).unwrap()
 }
 
 fn reference() -> Reference {

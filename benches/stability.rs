@@ -16,7 +16,6 @@ use std::path::PathBuf;
 
 #[path = "common/mod.rs"]
 mod common;
-use std::process::Command;
 
 fn main() {
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
@@ -25,24 +24,17 @@ fn main() {
     std::fs::create_dir_all(&tmp).unwrap();
     let threads = std::env::var("STICKSLIP_THREADS").unwrap_or_else(|_| "2".into());
     // Double C–M c/a for Q = 0.8 f_d P, Λ = 0.05 (stickslip analytic dcm).
-    let dcm: Value = serde_json::from_slice(
-        &Command::new(env!("CARGO_BIN_EXE_stickslip"))
-            .args([
-                "analytic",
-                "dcm",
-                "--fs",
-                "0.15",
-                "--fd",
-                "0.1",
-                "--lambda",
-                "0.05",
-                "--q-ratio",
-                "0.8",
-            ])
-            .output()
-            .unwrap()
-            .stdout,
-    )
+    let dcm: Value = serde_json::from_str(&common::analytic(&[
+        "dcm",
+        "--fs",
+        "0.15",
+        "--fd",
+        "0.1",
+        "--lambda",
+        "0.05",
+        "--q-ratio",
+        "0.8",
+    ]))
     .unwrap();
     let c_ref = dcm["c"].as_f64().unwrap();
     let a = 0.680_778;

@@ -35,13 +35,14 @@ enum Cmd {
         #[arg(long, value_enum, default_value = "info")]
         log: stickslip::run::LogLevel,
     },
-    /// Run one case against many friction laws on one shared model, in parallel, and write one
-    /// table (CSV and JSON).
+    /// Run one case against many friction laws and/or loads on one shared model, in parallel,
+    /// and write one table (CSV and JSON).
     Sweep {
-        /// The case file (JSON); its friction law is replaced by each law of the sweep.
+        /// The case file (JSON); its friction law and its stages are replaced by each law and
+        /// each load of the sweep.
         case: PathBuf,
-        /// The sweep file: {"friction": [law, law, …]} with laws as in a case's
-        /// `contact.friction`.
+        /// The sweep file: {"friction": [law, …], "stages": [[stage, …], …]} with laws as in a
+        /// case's `contact.friction` and loads as whole `stages` lists; either may be absent.
         sweep: PathBuf,
         /// Output directory (default: out/<case name>_sweep).
         #[arg(long)]

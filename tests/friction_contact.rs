@@ -239,24 +239,16 @@ fn figure_2_is_converged_in_the_step_count() {
 /// rows, 1e-5 on the pilot rows, whose two cancelling terms cost digits to round-off).
 #[test]
 fn newton_jacobian_matches_finite_differences() {
-    use stickslip::case::{Case, Control};
-    use stickslip::contact::solver::{Iterate, Method, Options, State, Status};
+    use stickslip::case::Control;
+    use stickslip::contact::solver::{Iterate, Method, State, Status};
     use stickslip::friction::FrictionLaw;
+    // The model does not depend on the law (each solve takes it): built once.
+    let (model, opt) = fig2_on_l1();
+    let cm = model.contact.as_ref().unwrap();
     for law in [
         FrictionLaw::ramp(0.15, 0.1, 2e-3).unwrap(),
         FrictionLaw::exponential(0.15, 0.1, 2e-3).unwrap(),
     ] {
-        let case: Case =
-            serde_json::from_value(shipped_case_on("fig2.json", "vm272_L1.msh")).unwrap();
-        let model = stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap();
-        let cm = model.contact.as_ref().unwrap();
-        let opt = Options {
-            method: Method::Newton,
-            kappa: 100.0,
-            max_iterations: 80,
-            tolerance: 1e-12,
-            verbose: false,
-        };
         // The state after a force-controlled step to Q = q from `prev` (normal force 10).
         let step = |q: f64, prev: &State| {
             model
@@ -393,24 +385,12 @@ fn figure_3_with_the_law_implied_by_double_cattaneo_mindlin() {
 /// factorised for more unknowns than the system has (nodes that left the contact).
 #[test]
 fn structured_newton_solve_matches_the_dense_system() {
-    use stickslip::case::{Case, Control};
-    use stickslip::contact::solver::{Iterate, LuCache, Method, Options, PilotDrive, Status};
+    use stickslip::case::Control;
+    use stickslip::contact::solver::{Iterate, LuCache, Method, PilotDrive, Status};
     use stickslip::friction::FrictionLaw;
     let law = FrictionLaw::ramp(0.15, 0.1, 2e-3).unwrap();
-    let mut v: Value =
-        serde_json::from_str(&std::fs::read_to_string(repo().join("cases/fig2.json")).unwrap())
-            .unwrap();
-    v["mesh"] = json!(repo().join("meshes/vm272_L1.msh").to_str().unwrap());
-    let case: Case = serde_json::from_value(v).unwrap();
-    let model = stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap();
+    let (model, opt) = fig2_on_l1();
     let cm = model.contact.as_ref().unwrap();
-    let opt = Options {
-        method: Method::Newton,
-        kappa: 100.0,
-        max_iterations: 80,
-        tolerance: 1e-12,
-        verbose: false,
-    };
     let mut st = cm.system.initial_state();
     for q in [0.0, 0.3, 0.6, 0.7] {
         st = model
@@ -539,4 +519,20 @@ fn off_solution(st: &stickslip::contact::solver::State) -> (Vec<f64>, Vec<f64>) 
         .map(|f| if *f < 0.0 { -1.0 } else { 1.0 })
         .collect();
     (mu, sign)
+}
+
+/// Fig. 2's case on mesh L1, built, and Newton options with a tight tolerance (for the checks
+/// of the Newton system itself).
+fn fig2_on_l1() -> (stickslip::model::Model, stickslip::contact::solver::Options) {
+    let case: stickslip::case::Case =
+        serde_json::from_value(shipped_case_on("fig2.json", "vm272_L1.msh")).unwrap();
+    let model = stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap();
+    let opt = stickslip::contact::solver::Options {
+        method: stickslip::contact::solver::Method::Newton,
+        kappa: 100.0,
+        max_iterations: 80,
+        tolerance: 1e-12,
+        verbose: false,
+    };
+    (model, opt)
 }

@@ -124,6 +124,14 @@ fn slip_control_traces_the_softening_branch() {
         "Q_max: force control {q_force:.6} (none at {q_fail:.6}), slip control peak {q_peak:.6} at step {i_peak} of {}",
         tang.len()
     );
+    // No step is cut back: the first slip-controlled step used to cycle across the ramp's
+    // kink until a cutback; the relaxed update (halved once it stops contracting) settles it.
+    // columns: 9 cutbacks
+    assert!(
+        tang.iter().all(|r| r[9] == 0.0),
+        "cutbacks under slip control: {:?}",
+        tang.iter().map(|r| r[9]).collect::<Vec<_>>()
+    );
     // The mean slip is driven exactly.
     let last = tang.last().unwrap();
     assert!((last[20] - 0.00272).abs() < 1e-12, "mean slip {}", last[20]);

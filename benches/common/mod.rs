@@ -67,3 +67,14 @@ pub fn run_sweep(
     let out = dir.join(format!("{name}_sweep"));
     run_timed("sweep", &[&path, &sweep], &out, threads, "sweep.json")
 }
+
+/// `stickslip analytic ARGS…`: its standard output (panics if the command fails).
+pub fn analytic(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .arg("analytic")
+        .args(args)
+        .output()
+        .expect("the stickslip binary runs");
+    assert!(out.status.success(), "stickslip analytic {args:?} failed");
+    String::from_utf8(out.stdout).expect("utf-8 output")
+}
