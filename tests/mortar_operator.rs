@@ -123,3 +123,66 @@ fn mortar_rows_match_brute_force_integrals() {
         assert!(ew < 1e-5 && eg < 1e-5 && et < 1e-5, "{ew} {eg} {et}");
     }
 }
+
+/// Every node of the candidate zone carries a contact unknown, on every level of the ladder and
+/// with a candidate gap much larger than the element size: the master search of the mortar
+/// integrals must reach as far as the gap. (Before the search included the gap, slave edges
+/// whose initial gap exceeded about ten element sizes found no master segment and their nodes
+/// silently dropped out: on L5 the mortar stopped at |x| = 0.77 mm inside a zone reaching
+/// 0.84 mm, and on L6 at 0.54 mm, inside the Hertz contact.)
+#[test]
+fn the_mortar_covers_the_whole_candidate_zone() {
+    let cases = [
+        ("vm272_L0.msh", None),
+        ("vm272_L3.msh", Some(0.5)),
+        ("vm272_L4.msh", None),
+        ("vm272_L5.msh", None),
+        ("vm272_L5.msh", Some(0.3)),
+    ];
+    for (file, gap) in cases {
+        let mesh = gmsh::read(&repo().join("meshes").join(file)).unwrap();
+        let tris: Vec<usize> = ["lower_body", "upper_body"]
+            .iter()
+            .flat_map(|b| mesh.group(b).unwrap().elements.clone())
+            .collect();
+        let orient = EdgeOrientation::new(&mesh, &tris);
+        let slave = contact::oriented_edges(&mesh, &orient, "lower_arc").unwrap();
+        let master = contact::oriented_edges(&mesh, &orient, "upper_arc").unwrap();
+        let g = gap.unwrap_or_else(|| contact::default_candidate_gap(&mesh, &slave));
+        let pair =
+            contact::build_pair(&mesh, "lower_arc", "upper_arc", &slave, &master, g, true).unwrap();
+        let m = &pair.mortar;
+        let with_unknown: std::collections::HashSet<usize> =
+            m.slave_nodes.iter().copied().collect();
+        let zone_nodes: std::collections::BTreeSet<usize> =
+            pair.zone_edges.iter().flatten().copied().collect();
+        let reach = |nodes: &mut dyn Iterator<Item = usize>| {
+            nodes.map(|n| mesh.nodes[n][0].abs()).fold(0.0, f64::max)
+        };
+        let zone_x = reach(&mut zone_nodes.iter().copied());
+        let mortar_x = reach(&mut m.slave_nodes.iter().copied());
+        let missing: Vec<usize> = zone_nodes
+            .iter()
+            .copied()
+            .filter(|n| !with_unknown.contains(n))
+            .collect();
+        println!(
+            "{file}, candidate gap {g:.3}: zone |x| <= {zone_x:.4}, mortar |x| <= {mortar_x:.4}, {} zone nodes, {} without a multiplier",
+            zone_nodes.len(),
+            missing.len()
+        );
+        assert!(
+            missing.is_empty(),
+            "{file}: zone nodes dropped: {missing:?}"
+        );
+        assert_eq!(zone_x, mortar_x, "{file}");
+        // Each zone edge is covered over its whole length (the master face is longer).
+        for (e, cov) in pair.zone_edges.iter().zip(&m.coverage) {
+            assert!((cov - 2.0).abs() < 1e-9, "{file}: edge {e:?} covered {cov}");
+        }
+        assert!(pair.face_ends.is_empty(), "{file}");
+        for n in &pair.rim_nodes {
+            assert!(with_unknown.contains(n), "{file}: rim node {n}");
+        }
+    }
+}

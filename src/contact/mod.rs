@@ -20,6 +20,9 @@ pub struct Pair {
     /// Nodes of the zone edges next to slave edges outside the zone: contact there means the
     /// zone may clip it.
     pub rim_nodes: Vec<usize>,
+    /// Nodes of zone edges that project (in part) beyond the end of the master face, or
+    /// that end the slave face: contact there is held by a face too short for it.
+    pub face_ends: Vec<usize>,
     /// Candidate gap used.
     pub candidate_gap: f64,
     /// The common normal, if the pair uses one.
@@ -42,6 +45,16 @@ pub enum PairError {
         master: String,
         gap: f64,
         min: f64,
+    },
+    #[error(
+        "contact: the mortar operator of `{slave}` lost the slave point ({x:.6}, {y:.6}): {why}; \
+         this is a defect of the contact search, please report it with the mesh"
+    )]
+    Dropped {
+        slave: String,
+        x: f64,
+        y: f64,
+        why: String,
     },
     #[error(
         "contact: slave `{slave}` and master `{master}` penetrate initially, by up to {depth:e} at ({x:.6}, {y:.6}); move the bodies apart"
@@ -130,9 +143,12 @@ pub fn build_pair(
     let mut samples: Vec<(f64, [f64; 2])> = Vec::new();
     // The deepest initial penetration, if any (reported, not resolved).
     let mut deepest: Option<(f64, [f64; 2])> = None;
+    // The largest initial gap sampled on a zone edge (bounds the mortar's search).
+    let mut zone_gap: f64 = candidate_gap;
     for (i, e) in slave.iter().enumerate() {
         let xs = e.map(|k| mesh.nodes[k]);
         let mut in_zone = false;
+        let mut edge_gap: f64 = 0.0;
         for s in [-1.0, 0.0, 1.0] {
             let (x, n, _, _) = mortar::frame(&xs, s);
             let h = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
@@ -145,10 +161,12 @@ pub fn build_pair(
                 if g <= candidate_gap {
                     in_zone = true;
                 }
+                edge_gap = edge_gap.max(g.abs());
             }
         }
         if in_zone {
             zone.push(i);
+            zone_gap = zone_gap.max(edge_gap);
         }
     }
     if let Some((depth, x)) = deepest {
@@ -192,7 +210,7 @@ pub fn build_pair(
             }
         }
     }
-    let reach = 2.0 * candidate_gap + 2.0 * hmax;
+    let reach = 2.0 * zone_gap + 2.0 * hmax;
     let near: Vec<[usize; 3]> = master
         .iter()
         .filter(|e| {
@@ -206,12 +224,16 @@ pub fn build_pair(
         })
         .copied()
         .collect();
-    let mortar = mortar::build(
-        &mesh.nodes,
-        &zone_edges,
-        &near,
-        common.then_some(first_touch),
-    );
+    let normal = common.then_some(first_touch);
+    let mortar = mortar::build(&mesh.nodes, &zone_edges, &near, normal, 2.0 * zone_gap);
+    let face_ends = check_coverage(
+        mesh,
+        slave_name,
+        (slave, &zone_edges),
+        master,
+        normal,
+        &mortar,
+    )?;
     // The rim: zone vertices shared with a slave edge outside the zone. Contact there means
     // the zone may clip it (a zone that is the whole slave face has no rim).
     let in_zone: std::collections::HashSet<usize> = zone.iter().copied().collect();
@@ -229,13 +251,87 @@ pub fn build_pair(
     }
     rim_nodes.sort_unstable();
     rim_nodes.dedup();
+    // The guard against clipping must see every rim node: each carries a multiplier.
+    if let Some(&n) = rim_nodes
+        .iter()
+        .find(|n| !mortar.slave_nodes.contains(n) && !face_ends.contains(n))
+    {
+        return Err(PairError::Dropped {
+            slave: slave_name.into(),
+            x: mesh.nodes[n][0],
+            y: mesh.nodes[n][1],
+            why: "a node on the rim of the candidate zone carries no contact unknown".into(),
+        });
+    }
     Ok(Pair {
         mortar,
         zone_edges,
         rim_nodes,
+        face_ends,
         candidate_gap,
         common_normal: common.then_some(first_touch),
     })
+}
+
+/// Verifies that the mortar operator covers every zone edge wherever the edge faces the
+/// master face: an edge that is covered only in part is checked again against the whole master
+/// face with an unbounded search, and any difference is an error (a slave point silently
+/// dropped from the contact). Returns the nodes of edges that reach past the master face's end
+/// and the two end nodes of the slave face when they are in the zone.
+fn check_coverage(
+    mesh: &Mesh,
+    slave_name: &str,
+    (slave, zone_edges): (&[[usize; 3]], &[[usize; 3]]),
+    master: &[[usize; 3]],
+    normal: Option<[f64; 2]>,
+    mortar: &Mortar,
+) -> Result<Vec<usize>, PairError> {
+    let dropped = |e: &[usize; 3], why: String| PairError::Dropped {
+        slave: slave_name.into(),
+        x: mesh.nodes[e[2]][0],
+        y: mesh.nodes[e[2]][1],
+        why,
+    };
+    if mortar.lost_points > 0 {
+        return Err(dropped(
+            &zone_edges[0],
+            format!(
+                "{} integration points could not be projected",
+                mortar.lost_points
+            ),
+        ));
+    }
+    let mut ends = Vec::new();
+    for (e, &cov) in zone_edges.iter().zip(&mortar.coverage) {
+        if cov >= 2.0 - 1e-9 {
+            continue;
+        }
+        let full = mortar::build(&mesh.nodes, &[*e], master, normal, f64::INFINITY);
+        if full.coverage[0] > cov + 1e-9 {
+            return Err(dropped(
+                e,
+                format!(
+                    "its edge is covered over {:.3} of its length by the search, {:.3} by all master edges",
+                    cov / 2.0,
+                    full.coverage[0] / 2.0
+                ),
+            ));
+        }
+        ends.extend_from_slice(e);
+    }
+    // Vertices that end the slave face (used by one edge of the face only).
+    let mut count = std::collections::HashMap::new();
+    for e in slave {
+        for v in [e[0], e[1]] {
+            *count.entry(v).or_insert(0usize) += 1;
+        }
+    }
+    for e in zone_edges {
+        ends.extend([e[0], e[1]].into_iter().filter(|v| count[v] == 1));
+    }
+    ends.sort_unstable();
+    ends.dedup();
+    Ok(ends)
 }
 
 /// A contact pair on a condensed model: the mortar operator expressed in the retained DOFs

@@ -44,6 +44,11 @@ pub struct Mortar {
     pub master_nodes: Vec<usize>,
     /// A representative element size at each slave node (edge chord).
     pub h: Vec<f64>,
+    /// Per slave edge (in the order given to [`build`]): the length of its parameter interval
+    /// [−1, 1] covered by segments, 2 when the whole edge projects onto the master face.
+    pub coverage: Vec<f64>,
+    /// Integration points whose projection failed inside a segment (should be none).
+    pub lost_points: usize,
 }
 
 /// Projects `x` along direction `n` onto the quadratic edge `xm`: returns `(r, g)` with
@@ -143,11 +148,16 @@ fn solve_r(
 /// With local normals the rigid approach `δ` of the bodies has a component `δ·x/R` along the
 /// tilted tangents, which appears as spurious slip of the order of the elastic slip when
 /// `a/R` is not small against `μ`.
+///
+/// `max_gap` bounds the initial gap of any point of the slave edges: master edges are searched
+/// within the slave edge's reach along its normals (its chord, the gap and the master edge's
+/// size), so no slave edge misses a master segment because its gap is large against its size.
 pub fn build(
     x: &[[f64; 2]],
     slave: &[[usize; 3]],
     master: &[[usize; 3]],
     common_normal: Option<[f64; 2]>,
+    max_gap: f64,
 ) -> Mortar {
     let n0 = common_normal;
     #[derive(Default)]
@@ -179,11 +189,13 @@ pub fn build(
         })
         .collect();
     let mut master_nodes = std::collections::BTreeSet::new();
+    let mut coverage = Vec::with_capacity(slave.len());
+    let mut lost_points = 0;
     for se in slave {
         let xs = coords(se);
         let chord = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
-        // Master edges near this slave edge: within a few chord lengths plus the largest gap
-        // the normals can span (the candidate zone was chosen by gap beforehand).
+        // Master edges near this slave edge: the normals from the edge travel at most
+        // `max_gap` (plus a margin of a few chords for the curvature of both faces).
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in xs {
             for i in 0..2 {
@@ -194,7 +206,7 @@ pub fn build(
         let mut segments: Vec<(f64, f64, usize)> = Vec::new();
         for (mi, me) in master.iter().enumerate() {
             let (mlo, mhi) = mboxes[mi];
-            let reach = 10.0 * chord + (mhi[0] - mlo[0]).max(mhi[1] - mlo[1]);
+            let reach = 2.0 * max_gap.abs() + 10.0 * chord + (mhi[0] - mlo[0]).max(mhi[1] - mlo[1]);
             if mlo[0] > hi[0] + reach
                 || mhi[0] < lo[0] - reach
                 || mlo[1] > hi[1] + reach
@@ -215,7 +227,11 @@ pub fn build(
             let mut s_hi: f64 = 1.0;
             for target in [-1.0, 1.0] {
                 if (ra - target) * (rb - target) < 0.0 {
-                    let s = solve_r(&xs, &xm, target, -1.0, 1.0, n0).unwrap_or(0.0);
+                    let Some(s) = solve_r(&xs, &xm, target, -1.0, 1.0, n0) else {
+                        // Cannot happen for faces that face each other; counted, never hidden.
+                        lost_points += 1;
+                        continue;
+                    };
                     // Which side of s is inside?
                     // r(s) is monotone: the left part (s < s*) is inside iff r(−1) is.
                     let inside_left = if target < 0.0 { ra > -1.0 } else { ra < 1.0 };
@@ -233,6 +249,7 @@ pub fn build(
                 segments.push((s_lo, s_hi, mi));
             }
         }
+        coverage.push(segments.iter().map(|(lo, hi, _)| hi - lo).sum::<f64>());
         for (s_lo, s_hi, mi) in segments {
             let xm = coords(&master[mi]);
             let half = 0.5 * (s_hi - s_lo);
@@ -240,6 +257,7 @@ pub fn build(
                 let s = s_lo + half * (gq + 1.0);
                 let (xp, n, tau, j) = frame_with(&xs, s, n0);
                 let Some((r, g0)) = project_along(&xm, xp, n) else {
+                    lost_points += 1;
                     continue;
                 };
                 let ns = lin3::n(s);
@@ -314,5 +332,7 @@ pub fn build(
         m.h.push(a.h);
     }
     m.master_nodes = master_nodes.into_iter().collect();
+    m.coverage = coverage;
+    m.lost_points = lost_points;
     m
 }
