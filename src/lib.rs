@@ -8,6 +8,7 @@
 pub mod analytic;
 pub mod assembly;
 pub mod case;
+pub mod checks;
 pub mod condense;
 pub mod contact;
 pub mod dofs;

@@ -79,6 +79,10 @@ pub struct Model {
     /// Condensed contact loads `w0` of the tractions at scale 1 and of the prescribed
     /// displacements.
     pub contact_w0: [Vec<f64>; 2],
+    /// When the pilot drives a body that no support holds (only the contact can): the
+    /// direction of pilot motion that opens the contact. A force along it has no equilibrium.
+    /// (body index, direction).
+    pub pilot_separation: Option<(usize, [f64; 2])>,
     pub timings: Timings,
 }
 
@@ -247,6 +251,19 @@ impl Model {
             source,
         })?;
 
+        let pilot_separation = pilot_nodes.as_ref().zip(pair.as_ref()).and_then(|(pn, p)| {
+            let node_body = node_bodies(&mesh, &elems, &elem_body);
+            let bp = node_body[*pn.first()?];
+            let sb = node_body[p.zone_edges[0][0]];
+            let mb = node_body[*p.mortar.master_nodes.first()?];
+            let n = p.first_touch;
+            match held_by_supports(&mesh, &node_body, bp, &dofs).0 {
+                true => None,
+                false if bp == mb => Some((bp, n)),
+                false if bp == sb => Some((bp, [-n[0], -n[1]])),
+                false => None,
+            }
+        });
         let t = Instant::now();
         let mut k = UpperCsc::pattern(&mesh, &elems, &dofs);
         let f_prescribed = assembly::assemble_stiffness(&mesh, &elems, &dofs, &mut k);
@@ -307,7 +324,10 @@ impl Model {
         let _ = GroupDim::Curve;
         let t = Instant::now();
         let contact = pair.map(|p| {
-            crate::contact::ContactModel::new(p, &dofs, &condensed, e_star.expect("with pair"))
+            let mut c =
+                crate::contact::ContactModel::new(p, &dofs, &condensed, e_star.expect("with pair"));
+            c.system.floating_pilot = pilot_separation.is_some();
+            c
         });
         let friction = match (&case.contact, e_star) {
             (Some(cs), Some(es)) => cs
@@ -340,6 +360,7 @@ impl Model {
             friction,
             contact,
             contact_w0,
+            pilot_separation,
             timings: timings.clone(),
         })
     }
@@ -380,6 +401,63 @@ impl Model {
     }
 }
 
+/// The body of each node (`usize::MAX` for nodes of no active triangle).
+fn node_bodies(mesh: &Mesh, elems: &[(usize, Material)], elem_body: &[usize]) -> Vec<usize> {
+    let mut node_body = vec![usize::MAX; mesh.nodes.len()];
+    for ((e, _), &b) in elems.iter().zip(elem_body) {
+        for &n in &mesh.triangles[*e].nodes {
+            node_body[n] = b;
+        }
+    }
+    node_body
+}
+
+/// Whether the supports of body `b` hold its three rigid modes (1,0), (0,1), (−y, x) (their
+/// restriction to the body's fixed DOFs has rank 3), and whether the pilot drives the body.
+fn held_by_supports(mesh: &Mesh, node_body: &[usize], b: usize, dofs: &DofMap) -> (bool, bool) {
+    use crate::dofs::Dof;
+    let pilot_dof = |d: Dof| matches!((d, dofs.pilot), (Dof::Free(i), Some(p)) if p.contains(&i));
+    let mut g = [[0.0f64; 3]; 3];
+    let mut piloted = false;
+    let mut scale: f64 = 0.0;
+    for (n, &nb) in node_body.iter().enumerate() {
+        if nb != b {
+            continue;
+        }
+        let x = mesh.nodes[n];
+        scale = scale.max(x[0].abs()).max(x[1].abs());
+        for c in 0..2 {
+            let d = dofs.node[n][c];
+            if pilot_dof(d) {
+                piloted = true;
+            }
+            if let Dof::Fixed(_) = d {
+                let row = if c == 0 {
+                    [1.0, 0.0, -x[1]]
+                } else {
+                    [0.0, 1.0, x[0]]
+                };
+                for i in 0..3 {
+                    for j in 0..3 {
+                        g[i][j] += row[i] * row[j];
+                    }
+                }
+            }
+        }
+    }
+    // Normalise the rotation column so the determinant test is scale-free.
+    let s = scale.max(f64::MIN_POSITIVE);
+    for i in 0..3 {
+        g[i][2] /= s;
+        g[2][i] /= s;
+    }
+    let det = g[0][0] * (g[1][1] * g[2][2] - g[1][2] * g[2][1])
+        - g[0][1] * (g[1][0] * g[2][2] - g[1][2] * g[2][0])
+        + g[0][2] * (g[1][0] * g[2][1] - g[1][1] * g[2][0]);
+    let tr = g[0][0] + g[1][1] + g[2][2];
+    (det > 1e-8 * tr.powi(3), piloted)
+}
+
 /// Retained DOFs (as retained indices) to ground in bodies that no support or pilot holds, so
 /// that a body held by contact alone still has a factorisable stiffness. Each such body gets
 /// three anchors on its contact nodes (both components of one node, one component of the node
@@ -393,58 +471,11 @@ fn anchors_of_floating_bodies(
     retained: &[usize],
 ) -> Vec<usize> {
     use crate::dofs::Dof;
-    let mut node_body = vec![usize::MAX; mesh.nodes.len()];
-    for ((e, _), &b) in elems.iter().zip(elem_body) {
-        for &n in &mesh.triangles[*e].nodes {
-            node_body[n] = b;
-        }
-    }
-    let pilot_dof = |d: Dof| matches!((d, dofs.pilot), (Dof::Free(i), Some(p)) if p.contains(&i));
+    let node_body = node_bodies(mesh, elems, elem_body);
     let mut out = Vec::new();
     for b in 0..nbodies {
-        // Rigid modes (1,0), (0,1), (−y, x) restricted to the body's fixed DOFs: held if rank 3.
-        let mut g = [[0.0f64; 3]; 3];
-        let mut piloted = false;
-        let mut scale: f64 = 0.0;
-        for (n, &nb) in node_body.iter().enumerate() {
-            if nb != b {
-                continue;
-            }
-            let x = mesh.nodes[n];
-            scale = scale.max(x[0].abs()).max(x[1].abs());
-            for c in 0..2 {
-                let d = dofs.node[n][c];
-                if pilot_dof(d) {
-                    piloted = true;
-                }
-                if let Dof::Fixed(_) = d {
-                    let row = if c == 0 {
-                        [1.0, 0.0, -x[1]]
-                    } else {
-                        [0.0, 1.0, x[0]]
-                    };
-                    for i in 0..3 {
-                        for j in 0..3 {
-                            g[i][j] += row[i] * row[j];
-                        }
-                    }
-                }
-            }
-        }
-        if piloted {
-            continue;
-        }
-        // Normalise the rotation column so the determinant test is scale-free.
-        let s = scale.max(f64::MIN_POSITIVE);
-        for i in 0..3 {
-            g[i][2] /= s;
-            g[2][i] /= s;
-        }
-        let det = g[0][0] * (g[1][1] * g[2][2] - g[1][2] * g[2][1])
-            - g[0][1] * (g[1][0] * g[2][2] - g[1][2] * g[2][0])
-            + g[0][2] * (g[1][0] * g[2][1] - g[1][1] * g[2][0]);
-        let tr = g[0][0] + g[1][1] + g[2][2];
-        if det > 1e-8 * tr.powi(3) {
+        let (held, piloted) = held_by_supports(mesh, &node_body, b, dofs);
+        if piloted || held {
             continue;
         }
         let nodes: Vec<usize> = retained

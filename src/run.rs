@@ -195,6 +195,8 @@ pub struct Summary {
     pub gmres_iterations: usize,
     pub peak_memory_mib: Option<f64>,
     pub friction: Option<FrictionSummary>,
+    /// Self-checks of the last converged step (see [`crate::checks`]).
+    pub checks: Vec<crate::checks::Check>,
     pub steps: Vec<StepRecord>,
     pub output_dir: String,
     /// `completed`, or why the run stopped early.
@@ -501,6 +503,11 @@ pub struct Simulation {
     pub gmres_iterations: usize,
     pub solve_s: f64,
     pub contact_solve_s: f64,
+    /// The last converged step: its free solution (runs without contact), contact state and
+    /// traction scale.
+    pub last_u: Option<Vec<f64>>,
+    pub last_state: Option<State>,
+    pub last_scale: f64,
 }
 
 /// Steps through the stages of a case on a built model with friction law `law` (overriding
@@ -535,6 +542,7 @@ pub fn simulate(
     let mut failure: Option<String> = None;
     let mut bracket: Option<(f64, f64)> = None;
     let mut lost_equilibrium: Option<(f64, f64)> = None;
+    let mut last_u: Option<Vec<f64>> = None;
     const MAX_CUTBACKS: usize = 12;
     'stages: for (si, stage) in case.stages.iter().enumerate() {
         let start = (
@@ -572,6 +580,10 @@ pub fn simulate(
                     (None, Control::Slip(_)) => Control::Slip(m0),
                 };
             }
+            if let Some(why) = unheld_before(model, case, &ctl) {
+                failure = Some(format!("step {}: {why}", step + 1));
+                break 'stages;
+            }
             let (u, p, iterations) = if let (Some(prev), Some(opt)) = (&cstate, &copt) {
                 let tc = Instant::now();
                 // Predictor: extrapolate the forces of the last two steps of this stage.
@@ -605,16 +617,10 @@ pub fn simulate(
                     Some(&mut lu_cache),
                 );
                 t_contact += tc.elapsed().as_secs_f64();
-                match res {
+                // A converged answer of an unheld body is a failed step: under force control
+                // the cutbacks then bracket the load that lost equilibrium.
+                let res = match res {
                     Ok(out) => {
-                        let p = PilotState {
-                            ux: out.state.pilot_u[0],
-                            uy: out.state.pilot_u[1],
-                            fx: out.state.pilot_f[0],
-                            fy: out.state.pilot_f[1],
-                        };
-                        let it = out.iterations;
-                        newton_total += it;
                         // Clipping: contact on the rim of the candidate zone.
                         let cm = model.contact.as_ref().expect("contact");
                         let rim = cm
@@ -632,6 +638,23 @@ pub fn simulate(
                                 step: step + 1,
                             });
                         }
+                        match unheld_after(model, case, &ctl, &out.state) {
+                            Some(why) => Err(why),
+                            None => Ok(out),
+                        }
+                    }
+                    Err(e) => Err(e.to_string()),
+                };
+                match res {
+                    Ok(out) => {
+                        let p = PilotState {
+                            ux: out.state.pilot_u[0],
+                            uy: out.state.pilot_u[1],
+                            fx: out.state.pilot_f[0],
+                            fy: out.state.pilot_f[1],
+                        };
+                        let it = out.iterations;
+                        newton_total += it;
                         older = cstate.take().map(|c| (alpha, c));
                         cstate = Some(out.state);
                         (None, has_pilot.then_some(p), it)
@@ -731,6 +754,9 @@ pub fn simulate(
                 contact: cstate.as_ref(),
                 record: records.last().expect("pushed above"),
             })?;
+            if u.is_some() {
+                last_u = u;
+            }
             // The cutback count is per step: the next step starts afresh.
             cutbacks = 0;
             if dalpha < nominal {
@@ -739,7 +765,6 @@ pub fn simulate(
         }
     }
     Ok(Simulation {
-        records,
         failure,
         lost_equilibrium,
         newton_iterations: newton_total,
@@ -747,7 +772,66 @@ pub fn simulate(
         gmres_iterations: lu_cache.gmres_iterations,
         solve_s: t_solve,
         contact_solve_s: t_contact,
+        last_u,
+        last_state: if records.is_empty() { None } else { cstate },
+        last_scale: scale,
+        records,
     })
+}
+
+/// The pilot's drive along the direction that separates its (otherwise unheld) body from the
+/// contact: the dominant component of that direction, and its force if force-controlled.
+fn separating_force(model: &Model, ctl: &[Control; 2]) -> Option<(usize, usize, Option<f64>)> {
+    let (body, sep) = model.pilot_separation?;
+    let k = if sep[0].abs() > sep[1].abs() { 0 } else { 1 };
+    let f = match ctl[k] {
+        Control::Force(f) => Some(f * sep[k].signum()),
+        Control::Displacement(_) | Control::Slip(_) => None,
+    };
+    Some((body, k, f))
+}
+
+/// A step that cannot have an equilibrium: the pilot pulls a body that nothing else holds away
+/// from the contact (a force along the separating direction).
+fn unheld_before(model: &Model, case: &Case, ctl: &[Control; 2]) -> Option<String> {
+    let (body, k, f) = separating_force(model, ctl)?;
+    let f = f.filter(|f| *f > 0.0)?;
+    Some(format!(
+        "the pilot's force pilot_{} = {:e} pulls `{}` away from the contact, and nothing else \
+         holds that body (no support): no equilibrium exists; press the bodies together or \
+         control the pilot by displacement",
+        ["x", "y"][k],
+        f * model.pilot_separation.expect("checked").1[k].signum(),
+        case.bodies[body].group
+    ))
+}
+
+/// A converged step whose answer means nothing: a force-controlled pilot body with no node in
+/// contact and no support (held only by the solver's grounding spring), or a pilot that ran
+/// away (see [`crate::checks::DISPLACEMENT_ERROR`]).
+fn unheld_after(model: &Model, case: &Case, ctl: &[Control; 2], st: &State) -> Option<String> {
+    let size = model.mesh.diameter();
+    let u = st.pilot_u[0].hypot(st.pilot_u[1]);
+    let limit = crate::checks::DISPLACEMENT_ERROR;
+    if model.dofs.pilot.is_some() && !(u <= limit * size) {
+        return Some(format!(
+            "the pilot moved {u:e}, more than {limit} times the model's size {size:e}: a body is \
+             not held (check the supports and that the loads press the bodies together)"
+        ));
+    }
+    let (body, k, f) = separating_force(model, ctl)?;
+    f?;
+    if st.status.iter().all(|s| *s == Status::Open) {
+        return Some(format!(
+            "no node is in contact and nothing else holds `{}` along {} (no support, pilot_{} \
+             force-controlled): the body is free; press the bodies together or control the pilot \
+             by displacement",
+            case.bodies[body].group,
+            ["x", "y"][k],
+            ["x", "y"][k]
+        ));
+    }
+    None
 }
 
 /// How many of the case's nominal load steps the load path has covered at `time` (stage index
@@ -898,13 +982,16 @@ pub fn run_model(
     drop(write_step);
     let Simulation {
         records,
-        failure,
+        mut failure,
         lost_equilibrium,
         newton_iterations: newton_total,
         lu_factorisations,
         gmres_iterations,
         solve_s: t_solve,
         contact_solve_s: t_contact,
+        last_u,
+        last_state,
+        last_scale,
     } = sim;
     if let Some(b) = &bar {
         b.finish_and_clear();
@@ -972,6 +1059,41 @@ pub fn run_model(
         )
         .as_bytes(),
     )?;
+    let friction = friction_summary(
+        &model,
+        model.friction.as_ref(),
+        records.last().and_then(|r| r.contact),
+        records
+            .iter()
+            .filter_map(|r| r.pilot)
+            .map(|p| p.fx.abs())
+            .fold(0.0, f64::max),
+    );
+    let u_last = match (last_u, &last_state) {
+        (Some(u), _) => Some(u),
+        (None, Some(st)) => Some(model.contact_displacement(last_scale, st)),
+        (None, None) => None,
+    };
+    let checks = u_last.as_ref().map_or(Vec::new(), |u| {
+        crate::checks::run_checks(&crate::checks::Input {
+            model: &model,
+            u,
+            scale: last_scale,
+            state: last_state.as_ref(),
+            records: &records,
+            friction: friction.as_ref(),
+        })
+    });
+    if failure.is_none()
+        && let Some(c) = checks
+            .iter()
+            .find(|c| c.level == crate::checks::Level::Error)
+    {
+        failure = Some(format!(
+            "the last step: check `{}` failed ({:.3e} against {:.3e}): {}",
+            c.name, c.value, c.limit, c.note
+        ));
+    }
     let summary = Summary {
         case: case_path.display().to_string(),
         title: case.title.clone(),
@@ -990,16 +1112,8 @@ pub fn run_model(
         lu_factorisations,
         gmres_iterations,
         peak_memory_mib: output::peak_memory_bytes().map(|b| b as f64 / (1024.0 * 1024.0)),
-        friction: friction_summary(
-            &model,
-            model.friction.as_ref(),
-            records.last().and_then(|r| r.contact),
-            records
-                .iter()
-                .filter_map(|r| r.pilot)
-                .map(|p| p.fx.abs())
-                .fold(0.0, f64::max),
-        ),
+        friction,
+        checks,
         steps: records,
         output_dir: out_dir.display().to_string(),
         status: match (&failure, lost_equilibrium) {
@@ -1025,6 +1139,21 @@ pub fn run_model(
             fr.h_contact,
             fr.s0_over_a.unwrap_or(0.0) * fr.a_hertz / 2.0
         );
+    }
+    if level >= LogLevel::Warn {
+        for c in &summary.checks {
+            // The s0 warning is printed above in its own words.
+            if c.level == crate::checks::Level::Warning && c.name != "s0_resolution" {
+                eprintln!(
+                    "warning: check `{}`: {:.4e} against {} {:.4e}: {}",
+                    c.name,
+                    c.value,
+                    if c.at_least { "at least" } else { "at most" },
+                    c.limit,
+                    c.note
+                );
+            }
+        }
     }
     if level >= LogLevel::Info {
         eprint!("{}", end_summary(case_path, &summary, out_dir, &stem));

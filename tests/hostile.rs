@@ -854,6 +854,7 @@ fn cli_cases() -> Vec<CliCase> {
     cm_zero["stages"][0]["pilot_y"] = json!({"force": 0.0});
     cm_zero["stages"][1]["pilot_x"] = json!({"force": 0.0});
     cm_zero["stages"][1]["steps"] = json!(2);
+    let cm_edit = |edit: fn(&mut Value)| on_l0(js(&edited(local_case("vm272_cm.json"), edit)));
     vec![
         cli(
             "truncated binary mesh",
@@ -977,6 +978,30 @@ fn cli_cases() -> Vec<CliCase> {
             "VM272 L0 with every node of `upper_body` moved down by 0.05 mm (initial overlap at x = 0)",
             vec![("case.json", hertz.clone()), ("mesh.msh", overlapping_vm272(0.05))],
             Refused(2, &["penetrate", "lower_arc", "upper_arc", "at ("]),
+        ),
+        cli(
+            "bodies pulled apart",
+            "`cases/vm272_cm.json` on L0 with `\"pilot_y\": {\"force\": 10.0}` (pulling; it completed with pilot displacements of 1e11 before the fix)",
+            cm_edit(|v| v["stages"][0]["pilot_y"] = json!({"force": 10.0})),
+            Refused(3, &["pulls", "upper_body", "no equilibrium"]),
+        ),
+        cli(
+            "pressed, then pulled apart",
+            "`cases/vm272_cm.json` on L0 with the tangential stage also ramping `pilot_y` from −10 to +10 (the contact carries Q until Q = 0.2 P)",
+            cm_edit(|v| v["stages"][1]["pilot_y"] = json!({"force": 10.0})),
+            Refused(5, &["equilibrium lost", "Q_max = 0.37"]),
+        ),
+        cli(
+            "lifted by displacement",
+            "`cases/hertz.json` on L0 with `\"pilot_y\": {\"displacement\": 0.1}` (the pilot holds the body; the contact opens)",
+            hertz_edit(|v| v["stages"][0]["pilot_y"] = json!({"displacement": 0.1})),
+            Completes,
+        ),
+        cli(
+            "bodies start apart",
+            "VM272 L0 with every node of `upper_body` moved up by 0.01 mm: the load closes the gap",
+            vec![("case.json", hertz.clone()), ("mesh.msh", overlapping_vm272(-0.01))],
+            Completes,
         ),
         cli(
             "faces that do not face each other",

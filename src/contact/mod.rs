@@ -27,6 +27,8 @@ pub struct Pair {
     pub candidate_gap: f64,
     /// The common normal, if the pair uses one.
     pub common_normal: Option<[f64; 2]>,
+    /// The slave's outward normal at the first touch (the common normal when there is one).
+    pub first_touch: [f64; 2],
 }
 
 /// What stops a pair from being built.
@@ -270,6 +272,7 @@ pub fn build_pair(
         face_ends,
         candidate_gap,
         common_normal: common.then_some(first_touch),
+        first_touch,
     })
 }
 
@@ -444,6 +447,7 @@ impl ContactModel {
             kg,
             weight: m0.weight.clone(),
             slip_orient,
+            floating_pilot: false,
         };
         ContactModel {
             pair,

@@ -185,6 +185,23 @@ pub struct ContactSystem {
     /// +1 or −1: the sign of the slips' response to a pilot force in +x, so that
     /// [`State::mean_slip`] grows in the direction the pilot is pushed.
     pub slip_orient: f64,
+    /// Whether the pilot drives a body that no support holds (only the contact can).
+    pub floating_pilot: bool,
+}
+
+/// Puts the three nodes of smallest gap in contact (stick with friction, else slip): three
+/// nodes span both sides of the closest point, which holds a body the pilot pushes and stops a
+/// frictionless rigid sliding mode.
+fn seed_closest(gaps: &[f64], friction: bool, status: &mut [Status]) {
+    let mut order: Vec<usize> = (0..gaps.len()).collect();
+    order.sort_by(|&a, &b| gaps[a].total_cmp(&gaps[b]));
+    for &j in order.iter().take(3) {
+        status[j] = if friction {
+            Status::Stick
+        } else {
+            Status::Slip
+        };
+    }
 }
 
 /// Options of a contact solve.
@@ -330,15 +347,7 @@ impl ContactSystem {
         // system holds the body that the pilot pushes (three nodes span both sides of the
         // first touch, which also stops a frictionless rigid sliding mode).
         if status.iter().all(|s| *s == Status::Open) {
-            let mut order: Vec<usize> = (0..ns).collect();
-            order.sort_by(|&a, &b| self.gap0[a].partial_cmp(&self.gap0[b]).expect("finite"));
-            for &j in order.iter().take(3.min(ns)) {
-                status[j] = if law.is_some() {
-                    Status::Stick
-                } else {
-                    Status::Slip
-                };
-            }
+            seed_closest(&self.gap0, law.is_some(), &mut status);
         }
         // Slip directions of the warm start: the sign of the committed tangential force.
         let mut sign: Vec<f64> = start
@@ -399,6 +408,15 @@ impl ContactSystem {
                         changes += 1;
                         status[j] = new;
                     }
+                }
+                // A force-driven pilot body that only the contact holds has no equilibrium with
+                // every node open (the system is singular): an iterate that opens them all
+                // overshot, so the closest nodes close again, as at the start of a step.
+                let forced = drive.iter().any(|d| matches!(d, PilotDrive::Force(_)));
+                if self.floating_pilot && forced && status.iter().all(|s| *s == Status::Open) {
+                    let gaps: Vec<f64> = (0..ns).map(|j| self.gap0[j] + y[j]).collect();
+                    seed_closest(&gaps, law.is_some(), &mut status);
+                    changes += 1;
                 }
                 if opt.verbose {
                     let count = |st: Status| status.iter().filter(|s| **s == st).count();

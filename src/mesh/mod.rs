@@ -68,6 +68,24 @@ impl Mesh {
         self.groups.iter().find(|g| g.name == name)
     }
 
+    /// The bounding box (lower, upper corner) of a set of nodes.
+    pub fn bounding_box(&self, nodes: impl IntoIterator<Item = usize>) -> ([f64; 2], [f64; 2]) {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for n in nodes {
+            for i in 0..2 {
+                lo[i] = lo[i].min(self.nodes[n][i]);
+                hi[i] = hi[i].max(self.nodes[n][i]);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// The diagonal of the bounding box of all nodes: the model's size.
+    pub fn diameter(&self) -> f64 {
+        let (lo, hi) = self.bounding_box(0..self.nodes.len());
+        (hi[0] - lo[0]).hypot(hi[1] - lo[1])
+    }
+
     /// Node coordinates of triangle `e`.
     pub fn tri_coords(&self, e: usize) -> [[f64; 2]; 6] {
         self.triangles[e].nodes.map(|n| self.nodes[n])

@@ -1,0 +1,417 @@
+//! Self-checks of a finished run: numbers that say whether the answer can be trusted, each
+//! with the threshold it is held to. They go into `summary.json` (`checks`) and, when they
+//! fail, onto the terminal; a failed check that makes the answer meaningless (equilibrium not
+//! satisfied, a body that ran away) is an error, the others are warnings.
+//!
+//! * `equilibrium`: the nodal forces of the recovered displacement field, `f_int = Σ K_e u_e`,
+//!   against the applied loads, the contact forces and the pilot force at every free DOF, and
+//!   the global balance of the support reactions, the pilot force and the tractions; relative
+//!   to the largest of those forces, and never to less than the force a strain of 1e-12 of
+//!   the stiffest body produces over the model's size nor to less than the largest term
+//!   `K_ij u_j` summed (round-off of a zero or vanishing load, or of a body moved rigidly).
+//! * `max_displacement`: the largest nodal displacement over the model's size (the diagonal of
+//!   its bounding box); small-strain theory needs it small, and a runaway means an unheld body.
+//! * `zone_margin`: elements between the outermost contact node and the edge of the candidate
+//!   zone (a run with contact on the zone's rim never completes: the zone is doubled);
+//!   `face_end`: contact on the end of a face, where the face is too short for the contact.
+//! * `elements_across_contact`: slave elements across the contact width 2a.
+//! * `s0_resolution`: the contact element size over s0, the transition length of a
+//!   slip-weakening law (resolved when h ≤ s0/2).
+//! * `hertz_a`: at the end of the first stage, the contact semi-width against the Hertz value
+//!   for the load, E* and the radius fitted to the initial gaps (only where the gap profile is
+//!   a parabola and the contact has not reached a face end).
+
+use crate::contact::solver::{State, Status};
+use crate::model::Model;
+use crate::run::{FrictionSummary, StepRecord};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// How much a check matters when it fails.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Level {
+    /// Passed (or informative).
+    Ok,
+    /// Failed, but the answer may still be usable: read the note.
+    Warning,
+    /// Failed: the answer is meaningless; the run does not complete.
+    Error,
+}
+
+/// One self-check: its value, the threshold it is held to, and the verdict.
+#[derive(Clone, Debug, Serialize)]
+pub struct Check {
+    pub name: &'static str,
+    pub value: f64,
+    /// The threshold the value is compared with.
+    pub limit: f64,
+    /// `value >= limit` passes (else `value <= limit`).
+    pub at_least: bool,
+    pub level: Level,
+    pub note: String,
+}
+
+impl Check {
+    /// A check that passes when `value <= limit` (NaN fails).
+    fn new(name: &'static str, value: f64, limit: f64, fail: Level, note: String) -> Check {
+        let pass = value <= limit;
+        Check {
+            name,
+            value,
+            limit,
+            at_least: false,
+            level: if pass { Level::Ok } else { fail },
+            note,
+        }
+    }
+
+    /// A check that passes when `value >= limit` (NaN fails).
+    fn at_least(name: &'static str, value: f64, limit: f64, fail: Level, note: String) -> Check {
+        let pass = value >= limit;
+        Check {
+            name,
+            value,
+            limit,
+            at_least: true,
+            level: if pass { Level::Ok } else { fail },
+            note,
+        }
+    }
+}
+
+/// Relative equilibrium residual above which the answer is rejected.
+pub const EQUILIBRIUM_LIMIT: f64 = 1e-6;
+/// The strain whose force is the smallest scale of the equilibrium check.
+const ROUND_OFF_STRAIN: f64 = 1e-12;
+/// Displacement over model size: above the first, small-strain theory is doubtful (warning);
+/// above the second a body ran away (error: no linear-elastic answer of a held body moves ten
+/// times its own size, while an unheld one, kept only by round-off, moves 1e9 times).
+pub const DISPLACEMENT_WARN: f64 = 0.01;
+pub const DISPLACEMENT_ERROR: f64 = 10.0;
+/// Fewer elements across the contact width than this draws a warning.
+pub const MIN_ELEMENTS_ACROSS: f64 = 10.0;
+/// Relative deviation of a from Hertz that draws a warning.
+pub const HERTZ_A_LIMIT: f64 = 0.03;
+
+/// The radius of the initial gap profile `g0 ≈ g_min + t²/(2R)` (t along the tangent of the
+/// first touch from the node of smallest gap), fitted by least squares over the zone nodes
+/// with |t| ≤ `t_max` (all of them when `None`). Returns (R, the closest node's position, the
+/// tangent, the RMS residual of the fit over the largest fitted gap).
+pub fn fit_radius(model: &Model, t_max: Option<f64>) -> Option<(f64, [f64; 2], [f64; 2], f64)> {
+    let cm = model.contact.as_ref()?;
+    let m = &cm.pair.mortar;
+    let n0 = cm.pair.common_normal.unwrap_or([0.0, 1.0]);
+    let j0 = (0..m.gap0.len()).min_by(|&a, &b| m.gap0[a].total_cmp(&m.gap0[b]))?;
+    let x0 = model.mesh.nodes[m.slave_nodes[j0]];
+    let tau = [n0[1], -n0[0]];
+    let pts: Vec<(f64, f64)> = (0..m.gap0.len())
+        .map(|j| {
+            let x = model.mesh.nodes[m.slave_nodes[j]];
+            let t = (x[0] - x0[0]) * tau[0] + (x[1] - x0[1]) * tau[1];
+            (t, m.gap0[j] - m.gap0[j0])
+        })
+        .filter(|(t, _)| t_max.is_none_or(|tm| t.abs() <= tm))
+        .collect();
+    let s4: f64 = pts.iter().map(|(t, _)| t.powi(4)).sum();
+    let s2g: f64 = pts.iter().map(|(t, g)| t * t * g).sum();
+    let radius = if s2g > 0.0 {
+        s4 / (2.0 * s2g)
+    } else {
+        f64::INFINITY
+    };
+    let gmax = pts.iter().map(|p| p.1.abs()).fold(0.0, f64::max);
+    let rms = (pts
+        .iter()
+        .map(|(t, g)| (g - t * t / (2.0 * radius)).powi(2))
+        .sum::<f64>()
+        / pts.len().max(1) as f64)
+        .sqrt()
+        / gmax.max(f64::MIN_POSITIVE);
+    Some((radius, x0, tau, rms))
+}
+
+/// Hertz semi-width of a line contact: `a = sqrt(4 P R / (π E*))`.
+pub fn hertz_a(load: f64, radius: f64, e_star: f64) -> f64 {
+    (4.0 * load * radius / (std::f64::consts::PI * e_star)).sqrt()
+}
+
+/// What the checks read from a finished run.
+pub struct Input<'a> {
+    pub model: &'a Model,
+    /// The free solution of the last converged step and its traction scale.
+    pub u: &'a [f64],
+    pub scale: f64,
+    /// The contact state of the last converged step (runs with contact).
+    pub state: Option<&'a State>,
+    pub records: &'a [StepRecord],
+    pub friction: Option<&'a FrictionSummary>,
+}
+
+/// All checks of a finished run.
+pub fn run_checks(inp: &Input) -> Vec<Check> {
+    let mut out = vec![equilibrium(inp), displacement(inp)];
+    if let (Some(st), Some(_)) = (inp.state, &inp.model.contact) {
+        out.extend(contact_checks(inp, st));
+    }
+    out
+}
+
+/// The force balance of the recovered field (see the module docs).
+fn equilibrium(inp: &Input) -> Check {
+    use crate::dofs::Dof;
+    let model = inp.model;
+    let dofs = &model.dofs;
+    // Each element's nodal forces and the size of the terms summed into them.
+    let (per_elem, terms): (Vec<[f64; 12]>, Vec<f64>) = model
+        .elems
+        .par_iter()
+        .map(|(e, mat)| {
+            let nodes = &model.mesh.triangles[*e].nodes;
+            let ue: [f64; 12] =
+                std::array::from_fn(|i| dofs.displacement(nodes[i / 2], inp.u)[i % 2]);
+            let k = crate::elasticity::element_stiffness(&model.mesh.tri_coords(*e), mat);
+            let fe: [f64; 12] =
+                std::array::from_fn(|i| (0..12).map(|j| k[i * 12 + j] * ue[j]).sum());
+            let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let umax = ue.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            (fe, kmax * umax)
+        })
+        .unzip();
+    let term = terms.iter().fold(0.0f64, |m, &v| m.max(v));
+    // Residual at free DOFs: f_int − loads − contact and pilot forces.
+    let mut res: Vec<f64> = model.f_traction.iter().map(|f| -inp.scale * f).collect();
+    let mut reaction = [0.0; 2];
+    for ((e, _), fe) in model.elems.iter().zip(&per_elem) {
+        for (a, &n) in model.mesh.triangles[*e].nodes.iter().enumerate() {
+            for c in 0..2 {
+                match dofs.node[n][c] {
+                    Dof::Free(i) => res[i] += fe[2 * a + c],
+                    Dof::Fixed(_) => reaction[c] += fe[2 * a + c],
+                    Dof::Unused => {}
+                }
+            }
+        }
+    }
+    let mut pilot = [0.0; 2];
+    if let (Some(st), Some(cm)) = (inp.state, &model.contact) {
+        let mut contact_only = st.clone();
+        contact_only.z.iter_mut().for_each(|z| *z = 0.0);
+        let r = cm.retained_forces(&contact_only, dofs.n_retained);
+        for (k, v) in r.iter().enumerate() {
+            res[dofs.n_interior + k] -= v;
+        }
+        pilot = st.pilot_f;
+    } else if let Some(p) = inp.records.last().and_then(|r| r.pilot) {
+        pilot = [p.fx, p.fy];
+    }
+    if let Some(p) = dofs.pilot {
+        for c in 0..2 {
+            res[p[c]] -= pilot[c];
+        }
+    }
+    let traction: [f64; 2] = std::array::from_fn(|c| {
+        (0..model.mesh.nodes.len())
+            .filter_map(|n| match dofs.node[n][c] {
+                Dof::Free(i) => Some(inp.scale * model.f_traction[i]),
+                _ => None,
+            })
+            .sum()
+    });
+    // The supports' reactions are f_int at the fixed DOFs: they, the pilot and the tractions
+    // balance (the contact forces are internal).
+    let global = (0..2)
+        .map(|c| (pilot[c] + traction[c] + reaction[c]).abs())
+        .fold(0.0, f64::max);
+    let local = res.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    // The force a strain of 1e-12 of the stiffest body over the model's size produces: below
+    // it a residual is round-off (zero and vanishing loads, a body moved rigidly).
+    let e_max = model.elems.iter().map(|(_, m)| m.e).fold(0.0, f64::max);
+    let round_off = ROUND_OFF_STRAIN * e_max * model.mesh.diameter();
+    let scale = [pilot, traction, reaction]
+        .iter()
+        .map(|v| v[0].hypot(v[1]))
+        .fold(round_off.max(term), f64::max);
+    let value = if scale > 0.0 {
+        local.max(global) / scale
+    } else {
+        0.0
+    };
+    Check::new(
+        "equilibrium",
+        value,
+        EQUILIBRIUM_LIMIT,
+        Level::Error,
+        format!(
+            "largest nodal force residual {local:.3e}, global imbalance {global:.3e} (supports, pilot, tractions), relative to {scale:.3e}"
+        ),
+    )
+}
+
+/// The largest displacement against the model's size.
+fn displacement(inp: &Input) -> Check {
+    let dofs = &inp.model.dofs;
+    let umax = (0..inp.model.mesh.nodes.len())
+        .filter(|&n| inp.model.active[n])
+        .map(|n| {
+            let u = dofs.displacement(n, inp.u);
+            u[0].hypot(u[1])
+        })
+        .fold(0.0, f64::max);
+    let size = inp.model.mesh.diameter();
+    let value = umax / size;
+    let mut c = Check::new(
+        "max_displacement",
+        value,
+        DISPLACEMENT_WARN,
+        Level::Warning,
+        format!(
+            "largest displacement {umax:.3e} over the model size {size:.3e}; small-strain theory needs it small (warning above {DISPLACEMENT_WARN}, error above {DISPLACEMENT_ERROR}: a body ran away)"
+        ),
+    );
+    if !(value <= DISPLACEMENT_ERROR) {
+        c.level = Level::Error;
+    }
+    c
+}
+
+/// Zone margin, face ends, elements across the contact, s0 resolution and Hertz a.
+fn contact_checks(inp: &Input, st: &State) -> Vec<Check> {
+    let model = inp.model;
+    let cm = model.contact.as_ref().expect("checked by the caller");
+    let m = &cm.pair.mortar;
+    let mut out = Vec::new();
+    let n0 = cm.pair.first_touch;
+    let tau = [n0[1], -n0[0]];
+    let t_of = |n: usize| {
+        let x = model.mesh.nodes[n];
+        x[0] * tau[0] + x[1] * tau[1]
+    };
+    let closed: Vec<usize> = (0..m.slave_nodes.len())
+        .filter(|&j| st.status[j] != Status::Open)
+        .collect();
+    if closed.is_empty() {
+        return out;
+    }
+    // Margin on each side, in elements: zone nodes beyond the outermost contact node, counted
+    // as edges (two nodes per quadratic edge).
+    let ts: Vec<f64> = closed.iter().map(|&j| t_of(m.slave_nodes[j])).collect();
+    let (tlo, thi) = ts
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &t| {
+            (a.min(t), b.max(t))
+        });
+    let zone_t: Vec<f64> = m.slave_nodes.iter().map(|&n| t_of(n)).collect();
+    // A side whose outermost zone node ends a face cannot grow: the face_end check covers it.
+    let end_of = |lo: bool| {
+        let k = (0..zone_t.len())
+            .min_by(|&i, &j| {
+                let o = zone_t[i].total_cmp(&zone_t[j]);
+                if lo { o } else { o.reverse() }
+            })
+            .expect("a zone with contact has nodes");
+        cm.pair.face_ends.contains(&m.slave_nodes[k])
+    };
+    let beyond_lo = zone_t.iter().filter(|&&t| t < tlo).count();
+    let beyond_hi = zone_t.iter().filter(|&&t| t > thi).count();
+    let sides: Vec<usize> = [(beyond_lo, end_of(true)), (beyond_hi, end_of(false))]
+        .iter()
+        .filter(|(_, face_end)| !face_end)
+        .map(|(n, _)| *n)
+        .collect();
+    if let Some(&beyond) = sides.iter().min() {
+        let margin = beyond as f64 / 2.0;
+        out.push(Check::at_least(
+            "zone_margin",
+            margin,
+            1.0,
+            Level::Error,
+            format!(
+                "{margin} slave elements between the contact and the nearer edge of the candidate zone (contact on the rim doubles the zone and restarts)"
+            ),
+        ));
+    }
+    let at_end = closed
+        .iter()
+        .filter(|&&j| cm.pair.face_ends.contains(&m.slave_nodes[j]))
+        .count();
+    out.push(Check::new(
+        "face_end",
+        at_end as f64,
+        0.0,
+        Level::Warning,
+        format!(
+            "{at_end} contact nodes on the end of the slave face or beyond the end of the master face: the faces are too short to hold the contact, unless the scene means it (a flat punch, a patch test)"
+        ),
+    ));
+    // Elements across the contact width (the contact figures' a, the centre element size).
+    let last = inp.records.last().and_then(|r| r.contact);
+    let a = last.map_or(0.0, |c| c.a);
+    let jc = closed[closed.len() / 2];
+    let across = 2.0 * a / m.h[jc];
+    out.push(Check::at_least(
+        "elements_across_contact",
+        across,
+        MIN_ELEMENTS_ACROSS,
+        Level::Warning,
+        format!(
+            "{across:.1} slave elements across the contact width 2a = {:.4e} (h = {:.3e}); fewer than {MIN_ELEMENTS_ACROSS} resolve the pressure poorly",
+            2.0 * a,
+            m.h[jc]
+        ),
+    ));
+    if let Some(f) = inp.friction
+        && let Some(s0) = f.s0_over_a.map(|s| s * f.a_hertz)
+    {
+        out.push(Check::new(
+            "s0_resolution",
+            f.h_contact / s0,
+            0.5,
+            Level::Warning,
+            format!(
+                "contact element size {:.3e} over the slip-weakening transition length s0 = {s0:.3e}; above 0.5 the transition zone is not resolved and Q_max depends on the mesh",
+                f.h_contact
+            ),
+        ));
+    }
+    out.extend(hertz_check(inp));
+    out
+}
+
+/// `a` at the end of the first stage against Hertz (see the module docs).
+fn hertz_check(inp: &Input) -> Option<Check> {
+    let model = inp.model;
+    let cm = model.contact.as_ref()?;
+    let rec = inp
+        .records
+        .iter()
+        .take_while(|r| r.stage == 0)
+        .last()
+        .or(inp.records.last())?;
+    let fig = rec.contact?;
+    let n0 = cm.pair.first_touch;
+    let load = (fig.fx * n0[0] + fig.fy * n0[1]).abs();
+    let tangential = (fig.fx * n0[1] - fig.fy * n0[0]).abs();
+    let (radius, _, _, rms) = fit_radius(model, Some(1.5 * fig.a))?;
+    // Not a Hertzian stage: no finite curvature, a profile that is not a parabola, or a
+    // contact with a sizeable tangential load (which changes a only through β, a small effect,
+    // but then the stage is not the normal one).
+    if !radius.is_finite() || radius <= 0.0 || rms > 0.02 || tangential > 0.05 * load {
+        return None;
+    }
+    let ah = hertz_a(load, radius, cm.e_star);
+    let dev = fig.a / ah - 1.0;
+    Some(Check::new(
+        "hertz_a",
+        dev.abs(),
+        HERTZ_A_LIMIT,
+        Level::Warning,
+        format!(
+            "a = {:.5e} at step {} against Hertz {ah:.5e} (P = {load:.4e}, fitted R = {radius:.4e}, E* = {:.4e}): {:+.2} %",
+            fig.a,
+            rec.step,
+            cm.e_star,
+            100.0 * dev
+        ),
+    ))
+}
