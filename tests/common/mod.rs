@@ -41,6 +41,30 @@ pub fn stickslip(args: &[&str]) -> (i32, String, String) {
 }
 
 /// The path of `meshes/NAME` as a JSON string, for a case's `"mesh"`.
+/// Makes sure `meshes/<stem>.msh` exists, building it with `meshes/generate.py <stem>` (gmsh
+/// from PyPI) when it does not. Panics, never skips, when gmsh is missing: CI installs it.
+pub fn ensure_mesh(stem: &str) -> PathBuf {
+    // Tests of one binary run in parallel: one builds, the others wait for the whole file.
+    static BUILD: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _guard = BUILD.lock().unwrap_or_else(|e| e.into_inner());
+    let path = repo().join("meshes").join(format!("{stem}.msh"));
+    if path.exists() {
+        return path;
+    }
+    let out = std::process::Command::new("python3")
+        .arg(repo().join("meshes/generate.py"))
+        .arg(stem)
+        .output()
+        .expect("python3 runs");
+    assert!(
+        out.status.success() && path.exists(),
+        "cannot build {}: `python3 meshes/generate.py {stem}` failed (install gmsh: pip install gmsh==4.15.2): {}",
+        path.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    path
+}
+
 pub fn mesh_path(name: &str) -> Value {
     json!(repo().join("meshes").join(name).to_str().unwrap())
 }
