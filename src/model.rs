@@ -368,7 +368,7 @@ impl Model {
     /// Nodal stresses (σxx, σyy, σxy, σzz), averaged over the elements around each node.
     pub fn nodal_stresses(&self, u: &[f64]) -> Vec<[f64; 4]> {
         use rayon::prelude::*;
-        let per_elem: Vec<[[f64; 3]; 6]> = self
+        let per_elem: Vec<[[f64; 4]; 6]> = self
             .elems
             .par_iter()
             .map(|(e, mat)| {
@@ -380,13 +380,11 @@ impl Model {
             .collect();
         let mut acc = vec![[0.0; 4]; self.mesh.nodes.len()];
         let mut count = vec![0u32; self.mesh.nodes.len()];
-        for ((e, mat), s) in self.elems.iter().zip(&per_elem) {
+        for ((e, _), s) in self.elems.iter().zip(&per_elem) {
             for (a, &n) in self.mesh.triangles[*e].nodes.iter().enumerate() {
-                let sz = mat.sigma_zz(s[a]);
-                for i in 0..3 {
+                for i in 0..4 {
                     acc[n][i] += s[a][i];
                 }
-                acc[n][3] += sz;
                 count[n] += 1;
             }
         }

@@ -72,9 +72,9 @@ pub fn stress_at(
     let (e, mat, r) = locate(mesh, elems, x)?;
     let nodes = &mesh.triangles[e].nodes;
     let ue: [f64; 12] = std::array::from_fn(|i| dofs.displacement(nodes[i / 2], u)[i % 2]);
-    let mp = tri6::map_point(&mesh.tri_coords(e), r[0], r[1]);
-    let s = mat.stress(elasticity::strain(&mp, &ue));
-    Some([s[0], s[1], s[2], mat.sigma_zz(s)])
+    let xe = mesh.tri_coords(e);
+    let mp = tri6::map_point(&xe, r[0], r[1]);
+    Some(elasticity::stress_at_point(&xe, &mp, &ue, &mat))
 }
 
 impl Model {
