@@ -510,6 +510,43 @@ pub struct Simulation {
     pub last_scale: f64,
 }
 
+/// The self-checks of the last converged step (none when no step converged).
+fn final_checks(
+    model: &Model,
+    last_u: Option<Vec<f64>>,
+    last_state: Option<&State>,
+    last_scale: f64,
+    records: &[StepRecord],
+    friction: Option<&FrictionSummary>,
+) -> Vec<crate::checks::Check> {
+    let u = match (last_u, last_state) {
+        (Some(u), _) => u,
+        (None, Some(st)) => model.contact_displacement(last_scale, st),
+        (None, None) => return Vec::new(),
+    };
+    crate::checks::run_checks(&crate::checks::Input {
+        model,
+        u: &u,
+        scale: last_scale,
+        state: last_state,
+        records,
+        friction,
+    })
+}
+
+/// The failure an error-level check makes of a run that otherwise completed.
+fn failed_check(checks: &[crate::checks::Check]) -> Option<String> {
+    checks
+        .iter()
+        .find(|c| c.level == crate::checks::Level::Error)
+        .map(|c| {
+            format!(
+                "the last step: check `{}` failed ({:.3e} against {:.3e}): {}",
+                c.name, c.value, c.limit, c.note
+            )
+        })
+}
+
 /// Steps through the stages of a case on a built model with friction law `law` (overriding
 /// the model's), calling `on_step` after every converged step. Steps that do not converge are
 /// cut back (halved) up to 12 times from the last converged state.
@@ -1069,30 +1106,16 @@ pub fn run_model(
             .map(|p| p.fx.abs())
             .fold(0.0, f64::max),
     );
-    let u_last = match (last_u, &last_state) {
-        (Some(u), _) => Some(u),
-        (None, Some(st)) => Some(model.contact_displacement(last_scale, st)),
-        (None, None) => None,
-    };
-    let checks = u_last.as_ref().map_or(Vec::new(), |u| {
-        crate::checks::run_checks(&crate::checks::Input {
-            model: &model,
-            u,
-            scale: last_scale,
-            state: last_state.as_ref(),
-            records: &records,
-            friction: friction.as_ref(),
-        })
-    });
-    if failure.is_none()
-        && let Some(c) = checks
-            .iter()
-            .find(|c| c.level == crate::checks::Level::Error)
-    {
-        failure = Some(format!(
-            "the last step: check `{}` failed ({:.3e} against {:.3e}): {}",
-            c.name, c.value, c.limit, c.note
-        ));
+    let checks = final_checks(
+        &model,
+        last_u,
+        last_state.as_ref(),
+        last_scale,
+        &records,
+        friction.as_ref(),
+    );
+    if failure.is_none() {
+        failure = failed_check(&checks);
     }
     let summary = Summary {
         case: case_path.display().to_string(),
@@ -1537,6 +1560,8 @@ pub struct SweepRow {
     pub c: f64,
     pub b: f64,
     pub friction: Option<FrictionSummary>,
+    /// The self-checks of the last converged step (an error-level one fails the row).
+    pub checks: Vec<crate::checks::Check>,
 }
 
 /// Runs each of `loads` (cases that differ from the model's in their stages only) with each
@@ -1559,7 +1584,7 @@ pub fn sweep(
             let res = simulate(model, case, Some(law), LogLevel::Error, &mut |_| Ok(()));
             let wall_s = t.elapsed().as_secs_f64();
             match res {
-                Ok(sim) => {
+                Ok(mut sim) => {
                     let last = sim.records.last().and_then(|r| r.contact);
                     let q_max = sim
                         .records
@@ -1567,6 +1592,18 @@ pub fn sweep(
                         .filter_map(|r| r.pilot)
                         .map(|p| p.fx.abs())
                         .fold(0.0, f64::max);
+                    let friction = friction_summary(model, Some(law), last, q_max);
+                    let checks = final_checks(
+                        model,
+                        sim.last_u.take(),
+                        sim.last_state.as_ref(),
+                        sim.last_scale,
+                        &sim.records,
+                        friction.as_ref(),
+                    );
+                    if sim.failure.is_none() {
+                        sim.failure = failed_check(&checks);
+                    }
                     let status = match (&sim.failure, sim.lost_equilibrium) {
                         (None, _) => "completed".to_string(),
                         (Some(_), Some((q, qf))) => {
@@ -1584,7 +1621,8 @@ pub fn sweep(
                         wall_s,
                         c: last.map_or(0.0, |f| f.c),
                         b: last.map_or(0.0, |f| f.b),
-                        friction: friction_summary(model, Some(law), last, q_max),
+                        friction,
+                        checks,
                     }
                 }
                 Err(e) => SweepRow {
@@ -1598,6 +1636,7 @@ pub fn sweep(
                     c: 0.0,
                     b: 0.0,
                     friction: None,
+                    checks: Vec::new(),
                 },
             }
         })

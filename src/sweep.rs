@@ -125,13 +125,13 @@ pub fn run(
 /// The sweep table as CSV.
 pub fn table(rows: &[SweepRow]) -> String {
     let mut s = String::from(
-        "index,load_index,f_s,f_d,delta,lambda,chi,psi,load,q_max,apparent_friction,apparent_friction_jkr,apparent_friction_dcm,c,b,steps,newton_iterations,wall_s,resolved,status\n",
+        "index,load_index,f_s,f_d,delta,lambda,chi,psi,load,q_max,apparent_friction,apparent_friction_jkr,apparent_friction_dcm,c,b,steps,newton_iterations,wall_s,resolved,status,failed_checks\n",
     );
     let o = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.9e}"));
     for r in rows {
         let f = r.friction.as_ref();
         s += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{:.9e},{:.9e},{},{},{:.4},{},\"{}\"\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{:.9e},{:.9e},{},{},{:.4},{},\"{}\",{}\n",
             r.index,
             r.load_index,
             o(f.map(|f| f.f_s)),
@@ -152,7 +152,13 @@ pub fn table(rows: &[SweepRow]) -> String {
             r.wall_s,
             f.and_then(|f| f.resolved)
                 .map_or(String::new(), |b| b.to_string()),
-            r.status.replace('"', "'")
+            r.status.replace('"', "'"),
+            r.checks
+                .iter()
+                .filter(|c| c.level != crate::checks::Level::Ok)
+                .map(|c| c.name)
+                .collect::<Vec<_>>()
+                .join(";")
         );
     }
     s

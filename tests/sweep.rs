@@ -55,6 +55,11 @@ fn sweep_reports_the_apparent_friction_of_each_law() {
             r["status"]
         );
         assert!((fe / jkr - 1.0).abs() < 0.02, "{fe} vs {jkr}");
+        // Every row carries the self-checks of its last converged step.
+        let checks = r["checks"].as_array().unwrap();
+        let eq = checks.iter().find(|c| c["name"] == "equilibrium").unwrap();
+        assert_eq!(eq["level"], "ok", "{eq}");
+        assert!(checks.iter().any(|c| c["name"] == "zone_margin"));
     }
     let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
     assert_eq!(csv.lines().count(), 4);
