@@ -1287,27 +1287,8 @@ pub fn friction_summary(
     let n0 = cm.pair.common_normal.unwrap_or([0.0, 1.0]);
     let load = (fig.fx * n0[0] + fig.fy * n0[1]).abs();
     // Effective radius from the initial gaps of the zone nodes: g0 ≈ t²/(2R), t along the face.
-    let m = &cm.pair.mortar;
-    let j0 =
-        (0..m.gap0.len()).min_by(|&a, &b| m.gap0[a].partial_cmp(&m.gap0[b]).expect("finite"))?;
-    let x0 = model.mesh.nodes[m.slave_nodes[j0]];
-    let tau = [n0[1], -n0[0]];
-    let (mut s4, mut s2g) = (0.0, 0.0);
-    let t_of = |j: usize| {
-        let x = model.mesh.nodes[m.slave_nodes[j]];
-        (x[0] - x0[0]) * tau[0] + (x[1] - x0[1]) * tau[1]
-    };
-    for j in 0..m.gap0.len() {
-        let t = t_of(j);
-        s4 += t.powi(4);
-        s2g += t * t * (m.gap0[j] - m.gap0[j0]);
-    }
-    let radius = if s2g > 0.0 {
-        s4 / (2.0 * s2g)
-    } else {
-        f64::INFINITY
-    };
-    let a_hertz = (4.0 * load * radius / (std::f64::consts::PI * cm.e_star)).sqrt();
+    let (radius, x0, tau, _) = crate::checks::fit_radius(model, None)?;
+    let a_hertz = crate::checks::hertz_a(load, radius, cm.e_star);
     let fs = law.f_static();
     let fd = law.f_dynamic().ok();
     let weakening = fd.filter(|fd| fs > *fd);
