@@ -269,7 +269,7 @@ fn displacement(inp: &Input) -> Check {
             "largest displacement {umax:.3e} over the model size {size:.3e}; small-strain theory needs it small (warning above {DISPLACEMENT_WARN}, error above {DISPLACEMENT_ERROR}: a body ran away)"
         ),
     );
-    if !(value <= DISPLACEMENT_ERROR) {
+    if value.is_nan() || value > DISPLACEMENT_ERROR {
         c.level = Level::Error;
     }
     c

@@ -269,11 +269,8 @@ mod tests {
             }
         }
         // Translations and the infinitesimal rotation give no force.
-        let modes: [Box<dyn Fn([f64; 2]) -> [f64; 2]>; 3] = [
-            Box::new(|_| [1.0, 0.0]),
-            Box::new(|_| [0.0, 1.0]),
-            Box::new(|x| [-x[1], x[0]]),
-        ];
+        let modes: [fn([f64; 2]) -> [f64; 2]; 3] =
+            [|_| [1.0, 0.0], |_| [0.0, 1.0], |x| [-x[1], x[0]]];
         for m in modes.iter() {
             let u: Vec<f64> = xe.iter().flat_map(|x| m(*x)).collect();
             for i in 0..12 {

@@ -203,6 +203,13 @@ pub struct Summary {
     pub status: String,
 }
 
+/// The load of one step: the traction scale and the pilot's two controls.
+#[derive(Clone, Copy, Debug)]
+pub struct StepLoad {
+    pub scale: f64,
+    pub control: [Control; 2],
+}
+
 impl Model {
     /// Solves one load step without contact: tractions at `scale`, the pilot driven by
     /// `control`. Returns the free solution vector and the pilot state (if there is a pilot).
@@ -242,14 +249,14 @@ impl Model {
     /// only; [`Model::contact_displacement`] recovers the full field when it is wanted).
     pub fn solve_contact_step(
         &self,
-        scale: f64,
-        control: [Control; 2],
+        load: StepLoad,
         prev: &State,
         guess: Option<&State>,
         opt: &solver::Options,
         law: Option<&crate::friction::FrictionLaw>,
         cache: Option<&mut solver::LuCache>,
     ) -> Result<solver::StepOutcome, ContactError> {
+        let StepLoad { scale, control } = load;
         let cm = self.contact.as_ref().expect("contact model");
         let w0: Vec<f64> = self.contact_w0[0]
             .iter()
@@ -645,8 +652,10 @@ pub fn simulate(
                         g
                     });
                 let res = model.solve_contact_step(
-                    sc,
-                    ctl,
+                    StepLoad {
+                        scale: sc,
+                        control: ctl,
+                    },
                     prev,
                     guess.as_ref(),
                     opt,
@@ -850,7 +859,7 @@ fn unheld_after(model: &Model, case: &Case, ctl: &[Control; 2], st: &State) -> O
     let size = model.mesh.diameter();
     let u = st.pilot_u[0].hypot(st.pilot_u[1]);
     let limit = crate::checks::DISPLACEMENT_ERROR;
-    if model.dofs.pilot.is_some() && !(u <= limit * size) {
+    if model.dofs.pilot.is_some() && (u.is_nan() || u > limit * size) {
         return Some(format!(
             "the pilot moved {u:e}, more than {limit} times the model's size {size:e}: a body is \
              not held (check the supports and that the loads press the bodies together)"
@@ -1016,7 +1025,6 @@ pub fn run_model(
     {
         write_step(step, time, scale, u.as_ref(), st.as_ref())?;
     }
-    drop(write_step);
     let Simulation {
         records,
         mut failure,

@@ -123,7 +123,10 @@ fn nearly_incompressible_contact_keeps_the_hertz_width() {
     let e_star = 200.0 / (2.0 * (1.0 - nu * nu));
     let a_hertz = (4.0 * 10.0 * 4.0 / (std::f64::consts::PI * e_star)).sqrt();
     let dev = a / a_hertz - 1.0;
-    println!("ν = {nu}: a = {a:.6}, Hertz {a_hertz:.6}: {:+.3} %", 100.0 * dev);
+    println!(
+        "ν = {nu}: a = {a:.6}, Hertz {a_hertz:.6}: {:+.3} %",
+        100.0 * dev
+    );
     assert!(dev.abs() < 0.004, "a off Hertz by {:+.3} %", 100.0 * dev);
     let s = summary(&r.out);
     let fitted = check(&s, "hertz_a")["value"].as_f64().unwrap();

@@ -24,7 +24,10 @@ fn patch_test_on_distorted_curved_mesh_is_exact() {
 /// The mixed P2/P0 element of nearly incompressible bodies passes the same patch test.
 #[test]
 fn patch_test_of_the_mixed_element_is_exact() {
-    let mat = Material { e: 70.0, nu: 0.4999 };
+    let mat = Material {
+        e: 70.0,
+        nu: 0.4999,
+    };
     assert!(mat.is_mixed());
     patch_test(mat);
 }

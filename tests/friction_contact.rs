@@ -6,6 +6,7 @@
 //! * the double Cattaneo–Mindlin solution of Figs. 2 and 3 (ramp and step laws);
 //! * convergence in the load-step count;
 //! * finite-difference checks of the Newton Jacobian for the ramp and exponential laws.
+//!
 //! The shipped cases are run as they are, or with the mesh or step count changed.
 
 mod common;
@@ -242,6 +243,7 @@ fn newton_jacobian_matches_finite_differences() {
     use stickslip::case::Control;
     use stickslip::contact::solver::{Iterate, Method, State, Status};
     use stickslip::friction::FrictionLaw;
+    use stickslip::run::StepLoad;
     // The model does not depend on the law (each solve takes it): built once.
     let (model, opt) = fig2_on_l1();
     let cm = model.contact.as_ref().unwrap();
@@ -253,8 +255,10 @@ fn newton_jacobian_matches_finite_differences() {
         let step = |q: f64, prev: &State| {
             model
                 .solve_contact_step(
-                    0.0,
-                    [Control::Force(q), Control::Force(-10.0)],
+                    StepLoad {
+                        scale: 0.0,
+                        control: [Control::Force(q), Control::Force(-10.0)],
+                    },
                     prev,
                     None,
                     &opt,
@@ -388,6 +392,7 @@ fn structured_newton_solve_matches_the_dense_system() {
     use stickslip::case::Control;
     use stickslip::contact::solver::{Iterate, LuCache, Method, PilotDrive, Status};
     use stickslip::friction::FrictionLaw;
+    use stickslip::run::StepLoad;
     let law = FrictionLaw::ramp(0.15, 0.1, 2e-3).unwrap();
     let (model, opt) = fig2_on_l1();
     let cm = model.contact.as_ref().unwrap();
@@ -395,8 +400,10 @@ fn structured_newton_solve_matches_the_dense_system() {
     for q in [0.0, 0.3, 0.6, 0.7] {
         st = model
             .solve_contact_step(
-                0.0,
-                [Control::Force(q), Control::Force(-10.0)],
+                StepLoad {
+                    scale: 0.0,
+                    control: [Control::Force(q), Control::Force(-10.0)],
+                },
                 &st,
                 None,
                 &opt,

@@ -7,6 +7,7 @@ use common::repo;
 use stickslip::case::{Case, Control};
 use stickslip::contact::solver::{Method, Options, Status};
 use stickslip::model::Model;
+use stickslip::run::StepLoad;
 
 const E_STAR: f64 = 109.890_109_890_109_9;
 const R_EFF: f64 = 4.0;
@@ -46,8 +47,10 @@ fn solve_model(model: &Model, load: f64, method: Method, kappa: f64) -> Solution
     let prev = cm.system.initial_state();
     let out = model
         .solve_contact_step(
-            0.0,
-            [Control::Displacement(0.0), Control::Force(-load)],
+            StepLoad {
+                scale: 0.0,
+                control: [Control::Displacement(0.0), Control::Force(-load)],
+            },
             &prev,
             None,
             &opt,

@@ -1184,7 +1184,7 @@ fn hostile_command_lines_give_a_message_and_never_panic_or_hang() {
                     for k in ["contact_fx", "contact_fy"] {
                         let fc: f64 = get(k).and_then(|s| s.parse().ok()).unwrap_or(f64::NAN);
                         // Round-off of a 10 N/mm load scale at most.
-                        if !(fc.abs() < 1e-12) {
+                        if fc.is_nan() || fc.abs() >= 1e-12 {
                             why.push(format!("zero load but {k} = {fc}"));
                         }
                     }

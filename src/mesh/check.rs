@@ -151,7 +151,7 @@ pub fn check(
                 })
                 .fold(0.0, f64::max);
             let area = tri6::vertex_area(&xe);
-            if !(area > 1e-12 * scale * scale) {
+            if area.is_nan() || area <= 1e-12 * scale * scale {
                 return Err(MeshCheckError::Degenerate {
                     path: path(mesh),
                     tag,
@@ -164,7 +164,7 @@ pub fn check(
             let min_det = pts
                 .map(|p| tri6::map_point(&xe, p[0], p[1]).det_j)
                 .fold(f64::INFINITY, f64::min);
-            if !(min_det > 0.0) {
+            if min_det.is_nan() || min_det <= 0.0 {
                 return Err(MeshCheckError::BadJacobian {
                     path: path(mesh),
                     tag,
@@ -192,7 +192,7 @@ pub fn check(
         for &l in &g.elements {
             let xe = mesh.line_coords(l);
             let len = (xe[0][0] - xe[1][0]).hypot(xe[0][1] - xe[1][1]);
-            if !(len > 0.0) {
+            if len.is_nan() || len <= 0.0 {
                 return Err(MeshCheckError::ZeroLengthEdge {
                     path: path(mesh),
                     tag: mesh.lines[l].tag,

@@ -293,6 +293,9 @@ pub fn msh41(
     s
 }
 
+/// Nodes, 6-node triangles and the 3-node edges of the four sides of a structured mesh.
+pub type Structured = (Vec<[f64; 2]>, Vec<[usize; 6]>, [Vec<[usize; 3]>; 4]);
+
 /// A structured mesh of the rectangle [x0,x1]×[y0,y1] with `nx × ny` cells split into 6-node
 /// triangles; interior vertices moved by `distort` (fraction of the cell size, deterministic
 /// pseudo-random). Returns nodes, triangles and the boundary lines of the four sides
@@ -305,7 +308,7 @@ pub fn structured(
     y0: f64,
     y1: f64,
     distort: f64,
-) -> (Vec<[f64; 2]>, Vec<[usize; 6]>, [Vec<[usize; 3]>; 4]) {
+) -> Structured {
     // Grid of (2nx+1) × (2ny+1) points; even indices are vertices.
     let (mx, my) = (2 * nx + 1, 2 * ny + 1);
     let id = |i: usize, j: usize| j * mx + i;
