@@ -100,7 +100,11 @@ fn main() -> ExitCode {
             match stickslip::run::run(&case, &opts) {
                 Ok(_) => ExitCode::SUCCESS,
                 Err(e) => {
-                    eprintln!("error: {e}");
+                    // Exit 5 (equilibrium lost past Q_max) is the answer of a force-controlled
+                    // run, in summary.json's status: `--quiet` keeps it off the terminal.
+                    if !(quiet && e.exit_code() == 5) {
+                        eprintln!("error: {e}");
+                    }
                     ExitCode::from(e.exit_code() as u8)
                 }
             }

@@ -95,7 +95,17 @@ fn pressed_then_pulled_apart_loses_equilibrium_at_coulomb_limit() {
     case["stages"][1]["pilot_y"] = json!({"force": 10.0});
     let r = run_case_in(&dir, "case.json", &case.to_string(), &["--quiet"]);
     assert_eq!(r.code, 5, "{}", r.stderr);
+    // Exit 5 is the answer of a force-controlled run: `--quiet` prints nothing.
+    assert_eq!(r.stderr.trim(), "", "--quiet printed on exit 5");
     let s = summary(&r.out);
+    assert!(
+        s["status"]
+            .as_str()
+            .unwrap()
+            .starts_with("equilibrium lost"),
+        "{}",
+        s["status"]
+    );
     let q = s["friction"]["q_max"].as_f64().unwrap();
     let exact = 0.936 * 2.0 / 4.936;
     println!("Q_max = {q:.6} against {exact:.6}");
