@@ -54,7 +54,8 @@ fn sweep_reports_the_apparent_friction_of_each_law() {
             "{}",
             r["status"]
         );
-        assert!((fe / jkr - 1.0).abs() < 0.02, "{fe} vs {jkr}");
+        // Measured +0.02, +0.16, −0.47 % (README).
+        assert!((fe / jkr - 1.0).abs() < 0.006, "{fe} vs {jkr}");
         // Every row carries the self-checks of its last converged step.
         let checks = r["checks"].as_array().unwrap();
         let eq = checks.iter().find(|c| c["name"] == "equilibrium").unwrap();
