@@ -1101,6 +1101,15 @@ pub fn run_model(
                 "mean_slip",
             ],
             &rows,
+            &[
+                "step",
+                "stage",
+                "iterations",
+                "cutbacks",
+                "n_contact",
+                "n_stick",
+                "n_slip",
+            ],
         )
         .as_bytes(),
     )?;
@@ -1475,7 +1484,7 @@ pub fn contact_csv(model: &Model, st: &State) -> String {
         .collect();
     let mut header = vec!["x", "y"];
     header.extend(CONTACT_FIELDS);
-    output::csv(&header, &rows)
+    output::csv(&header, &rows, &["status"])
 }
 
 /// The bodies dataset of one step: displacement, stresses, von Mises, body id.

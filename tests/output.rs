@@ -61,3 +61,52 @@ fn vtu_holds_every_documented_array_with_finite_values() {
     }
     assert!(summary["peak_memory_mib"].as_f64().unwrap() > 0.0);
 }
+
+/// Counts, indices and status codes in the CSV files are integers, not `4.0e0`.
+#[test]
+fn csv_counts_are_integers() {
+    let dir = common::tempdir("csv-int");
+    let (code, _, err) = stickslip(&[
+        "run",
+        repo().join("cases/vm272_cm.json").to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(code == 0, "{err}");
+    let check = |file: &str, cols: &[&str]| {
+        let text = std::fs::read_to_string(dir.join(file)).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        for line in lines {
+            let v: Vec<&str> = line.split(',').collect();
+            for c in cols {
+                let k = header.iter().position(|h| h == c).unwrap();
+                assert!(v[k].parse::<i64>().is_ok(), "{file}: {c} = {}", v[k]);
+            }
+            // The other columns stay full-precision floats.
+            let k = header.iter().position(|h| *h != cols[0]).unwrap();
+            assert!(v[k].parse::<f64>().is_ok(), "{file}: {}", v[k]);
+        }
+    };
+    check(
+        "history.csv",
+        &[
+            "step",
+            "stage",
+            "iterations",
+            "cutbacks",
+            "n_contact",
+            "n_stick",
+            "n_slip",
+        ],
+    );
+    let last = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .filter(|n| n.contains("contact_") && n.ends_with(".csv"))
+        .max()
+        .expect("a contact CSV");
+    check(&last, &["status"]);
+}

@@ -48,12 +48,24 @@ pub fn pvd(entries: &[PvdEntry]) -> String {
     s
 }
 
-/// A CSV table with a header row.
-pub fn csv(header: &[&str], rows: &[Vec<f64>]) -> String {
+/// A CSV table with a header row: columns named in `integer` (counts, indices, status codes)
+/// are written as integers, the others as `{:.12e}`.
+pub fn csv(header: &[&str], rows: &[Vec<f64>], integer: &[&str]) -> String {
+    let int_col: Vec<bool> = header.iter().map(|h| integer.contains(h)).collect();
     let mut s = header.join(",");
     s.push('\n');
     for r in rows {
-        let line: Vec<String> = r.iter().map(|v| format!("{v:.12e}")).collect();
+        let line: Vec<String> = r
+            .iter()
+            .zip(&int_col)
+            .map(|(v, &int)| {
+                if int {
+                    format!("{}", v.round() as i64)
+                } else {
+                    format!("{v:.12e}")
+                }
+            })
+            .collect();
         s += &line.join(",");
         s.push('\n');
     }
