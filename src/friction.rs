@@ -9,7 +9,7 @@
 //! * `Δ = W / ((f_s − f_d) p)` — the slip length of eq. (Maugis10).
 //!
 //! The parametric shapes are all defined so that `W/p = (f_s − f_d) Δ` holds **exactly** with
-//! the `delta` parameter they carry (the convention of `shared/reference/vm272.md`):
+//! the `delta` parameter they carry (the convention of `docs/reference.md`):
 //!
 //! | shape | definition |
 //! |---|---|

@@ -1,6 +1,6 @@
 //! Tests of the closed forms (`stickslip::analytic`) and friction laws (`stickslip::friction`)
 //! against independent references: numerical quadrature of the defining integrals written out
-//! here, limits stated in the paper, and the numbers of `shared/reference/vm272.md`.
+//! here, limits stated in the paper, and the numbers of `docs/reference.md`.
 
 use clap::Parser;
 use std::f64::consts::PI;
@@ -285,7 +285,7 @@ fn k_ii_is_the_limit_of_the_singular_traction() {
     assert!(prev < 1e-4, "{prev}");
 }
 
-// Reference: shared/reference/vm272.md — a = 0.6808 mm, p0 = 9.351 N/mm², E* = 109.89 N/mm²,
+// Reference: docs/reference.md — a = 0.6808 mm, p0 = 9.351 N/mm², E* = 109.89 N/mm²,
 // c = 0.4965 mm, c/a = 0.729 at Q = 0.936 N/mm, μ = 0.2. Tolerances: half a unit of the last
 // quoted digit.
 #[test]

@@ -1,5 +1,5 @@
 //! Frictionless mortar contact of the two VM272 half-cylinders under the normal load
-//! (reference: Hertz, Johnson *Contact Mechanics* §4.2; numbers of `../shared/reference/vm272.md`:
+//! (reference: Hertz, Johnson *Contact Mechanics* §4.2; numbers of `docs/reference.md`:
 //! a = 0.6808 mm, p0 = 9.351 N/mm² at P = 10 N/mm, E* = 109.89 N/mm², R' = 4 mm).
 
 mod common;

@@ -1,5 +1,5 @@
 //! The scene's own elasticity check: the Hertzian pressure of VM272 (p0 = 9.351 N/mm²,
-//! a = 0.6808 mm; `../shared/reference/vm272.md`) applied as a traction on a block of
+//! a = 0.6808 mm; `docs/reference.md`) applied as a traction on a block of
 //! half-width and depth 60a gives, along the symmetry axis, McEwen's half-space stresses
 //! (Johnson, *Contact Mechanics*, eq. 5.75):
 //!   σ_x = −p0 [(1 + 2z²/a²)/√(1 + z²/a²) − 2z/a],   σ_z = −p0/√(1 + z²/a²),

@@ -11,7 +11,7 @@ For every requested mesh level k this script
   3. reads the contact pressure and shear at the slave nodes from the .frd file
      (*CONTACT FILE, CSTR/CDIS) at the end of the normal-load step and of the tangential step;
   4. scores them against the half-space closed forms (Hertz, Cattaneo-Mindlin) of
-     shared/reference/vm272.md;
+     docs/reference.md;
   5. writes <out>/L{k}/contact_L{k}.csv (x, p, q, status, ... per slave node and step) and
      appends one JSON object per run to <out>/results.jsonl (also printed on stdout).
 

@@ -3,7 +3,7 @@
 //! per unit thickness, Dundurs' β = 0 so that the pressure is unaffected by friction).
 //!
 //! Equation labels refer to the LaTeX source of Papangelo, Ciavarella & Barber
-//! (`shared/paper/000_cc5bd6359bc76b97.txt`):
+//! (the paper, see `docs/reference.md`):
 //!
 //! | module | content |
 //! |---|---|
