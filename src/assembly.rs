@@ -62,18 +62,6 @@ impl UpperCsc {
         self.col_ptr[c] + rows.binary_search(&r).expect("entry in pattern")
     }
 
-    /// `y += A x` for the full symmetric matrix whose upper triangle this is.
-    pub fn sym_mul_add(&self, x: &[f64], y: &mut [f64]) {
-        for c in 0..self.n {
-            for k in self.col_ptr[c]..self.col_ptr[c + 1] {
-                let (r, v) = (self.row_idx[k], self.values[k]);
-                y[r] += v * x[c];
-                if r != c {
-                    y[c] += v * x[r];
-                }
-            }
-        }
-    }
 }
 
 /// Fills `k.values` with the stiffness of the given elements and returns the forces on the free

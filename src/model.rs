@@ -8,7 +8,7 @@ use crate::dofs::{DofMap, SupportSpec};
 use crate::elasticity::{self, Material};
 use crate::linsolve::PartialSymbolic;
 use crate::loads::{EdgeOrientation, Traction};
-use crate::mesh::{GroupDim, Mesh, check};
+use crate::mesh::{Mesh, check};
 use std::time::Instant;
 
 /// Anything that stops a model from being built or solved.
@@ -62,8 +62,6 @@ pub struct Model {
     pub elem_body: Vec<usize>,
     pub dofs: DofMap,
     pub k: UpperCsc,
-    /// Symbolic analysis of the stiffness (ordering with the retained DOFs last).
-    pub symbolic: PartialSymbolic,
     /// Factorised stiffness and condensed system on the retained DOFs.
     pub condensed: Condensed,
     /// Nodal forces of the tractions at scale 1 (free DOFs).
@@ -321,7 +319,6 @@ impl Model {
         }
         let condensed = Condensed::build(&k, dofs.n_interior, &grounded, &symbolic)?;
         timings.factorise = t.elapsed().as_secs_f64();
-        let _ = GroupDim::Curve;
         let t = Instant::now();
         let contact = pair.map(|p| {
             let mut c =
@@ -352,7 +349,6 @@ impl Model {
             elem_body,
             dofs,
             k,
-            symbolic,
             condensed,
             f_traction,
             f_prescribed,

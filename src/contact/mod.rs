@@ -346,8 +346,6 @@ pub struct ContactModel {
     pub y_rows: Vec<Vec<(usize, f64)>>,
     /// Composite plane-strain modulus of the pair.
     pub e_star: f64,
-    /// Whether each retained DOF belongs to the master side (for the total contact force).
-    pub master_dof: Vec<bool>,
 }
 
 impl ContactModel {
@@ -418,16 +416,6 @@ impl ContactModel {
         );
         let kg: Vec<f64> = cond.grounding.iter().map(|g| g.1).collect();
         let eps_unit = (0..ns).map(|j| e_star * m0.weight[j] / m0.h[j]).collect();
-        let mut master_dof = vec![false; n_r];
-        for &node in &m0.master_nodes {
-            for c in 0..2 {
-                if let Dof::Free(i) = dofs.node[node][c]
-                    && i >= n_i
-                {
-                    master_dof[i - n_i] = true;
-                }
-            }
-        }
         // Orientation of the mean slip: its response to a pilot force in +x.
         let slip_orient = if has_pilot {
             let s: f64 = (0..ns).map(|j| m0.weight[j] * w[(ns + j, 2 * ns)]).sum();
@@ -454,7 +442,6 @@ impl ContactModel {
             system,
             y_rows,
             e_star,
-            master_dof,
         }
     }
 

@@ -7,7 +7,6 @@ pub mod check;
 pub mod gmsh;
 pub mod info;
 
-use std::collections::HashMap;
 use std::path::PathBuf;
 
 /// A 6-node triangle (see [`crate::shapes::tri6`] for the node numbering).
@@ -115,15 +114,4 @@ impl Mesh {
         v
     }
 
-    /// Map from a sorted vertex pair of a triangle edge to (triangle, local edge index).
-    pub fn edge_to_triangle(&self) -> HashMap<(usize, usize), (usize, usize)> {
-        let mut m = HashMap::with_capacity(self.triangles.len() * 3);
-        for (e, t) in self.triangles.iter().enumerate() {
-            for (k, ed) in crate::shapes::tri6::EDGE_NODE_IDS.iter().enumerate() {
-                let (a, b) = (t.nodes[ed[0]], t.nodes[ed[1]]);
-                m.insert((a.min(b), a.max(b)), (e, k));
-            }
-        }
-        m
-    }
 }
