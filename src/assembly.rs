@@ -61,7 +61,6 @@ impl UpperCsc {
         let rows = &self.row_idx[self.col_ptr[c]..self.col_ptr[c + 1]];
         self.col_ptr[c] + rows.binary_search(&r).expect("entry in pattern")
     }
-
 }
 
 /// Fills `k.values` with the stiffness of the given elements and returns the forces on the free

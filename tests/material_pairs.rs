@@ -53,7 +53,8 @@ fn jkr_limit_when_s0_is_resolved() {
         h / s0,
         100.0 * (fe / jkr - 1.0)
     );
-    assert!((fe / jkr - 1.0).abs() < 0.02, "FE {fe} vs JKR {jkr}");
+    // Measured −0.11 %.
+    assert!((fe / jkr - 1.0).abs() < 0.003, "FE {fe} vs JKR {jkr}");
     assert!(q_max / p < fs, "Q_max/P = {} ≥ f_s = {fs}", q_max / p);
 }
 
@@ -78,5 +79,31 @@ fn rabinowicz_pairs_lose_equilibrium_just_below_fs() {
         );
         let dcm = num(f, "apparent_friction_dcm");
         assert!((dcm - fs).abs() < 1e-12, "{name}: double C–M {dcm}");
+    }
+}
+
+/// The two copper pairs (Λ ≈ 25–28, s0 resolved): equilibrium is lost just below f_s
+/// (measured Q_max/P = 0.99759 f_s for copper on mild steel, 0.99741 f_s for mild steel on
+/// copper), far from the JKR regime.
+#[test]
+fn copper_pairs_lose_equilibrium_just_below_fs() {
+    for (name, lambda_range) in [
+        ("pair_copper_mild_steel", (27.0, 29.0)),
+        ("pair_mild_steel_copper", (24.0, 26.5)),
+    ] {
+        let (code, err, s) = run(name);
+        assert_eq!(code, 5, "{name}: {err}");
+        let f = &s["friction"];
+        let (fs, apparent, lambda) = (num(f, "f_s"), num(f, "apparent_friction"), num(f, "lambda"));
+        println!("{name}: Λ = {lambda:.4e}, Q_max/P = {apparent:.5} (f_s = {fs})");
+        assert_eq!(f["resolved"], json!(true), "{name}: {f}");
+        assert!(
+            lambda > lambda_range.0 && lambda < lambda_range.1,
+            "{name}: Λ = {lambda}"
+        );
+        assert!(
+            apparent < fs && apparent > 0.9965 * fs,
+            "{name}: Q_max/P = {apparent}, f_s = {fs}"
+        );
     }
 }

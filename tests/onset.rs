@@ -7,7 +7,7 @@
 //!   stick zone at the same Q.
 
 mod common;
-use common::{run_case, shipped_case_on};
+use common::{run_case, shipped_case, shipped_case_on};
 use serde_json::{Value, json};
 
 fn run(name: &str, stage: Value) -> (i32, String, Vec<Vec<f64>>, Value) {
@@ -108,10 +108,11 @@ fn slip_control_traces_the_softening_branch() {
         .trim_end_matches(')')
         .parse()
         .unwrap();
-    let (code, err, rows, _) = run(
-        "onset-slip",
-        json!({"steps": 109, "pilot_x": {"slip": 0.00272}}),
-    );
+    // The shipped slip-controlled case, as it is (VTK output off).
+    let mut v = shipped_case("fig2_softening.json");
+    v["output"] = json!({"vtu": false});
+    let r = run_case("onset-slip", &v, &[]);
+    let (code, err, rows) = (r.code, r.stderr.clone(), r.history().rows);
     assert_eq!(code, 0, "{err}");
     // columns: 4 pilot_ux, 6 pilot_fx (Q), 15 c, 20 mean_slip
     let tang: Vec<&Vec<f64>> = rows.iter().filter(|r| r[1] == 1.0).collect();

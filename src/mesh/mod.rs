@@ -113,5 +113,4 @@ impl Mesh {
         v.dedup();
         v
     }
-
 }
