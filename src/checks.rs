@@ -23,7 +23,7 @@
 
 use crate::contact::solver::{State, Status};
 use crate::model::Model;
-use crate::run::{FrictionSummary, StepRecord};
+use crate::report::{FrictionSummary, StepRecord};
 use rayon::prelude::*;
 use serde::Serialize;
 

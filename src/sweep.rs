@@ -3,8 +3,11 @@
 use crate::case::{Case, FrictionSpec, Stage};
 use crate::model::Model;
 use crate::output;
-use crate::run::{self, SweepRow};
+use crate::report::{FrictionSummary, failed_check, final_checks, friction_summary};
+use crate::run::{LogLevel, simulate};
+use serde::Serialize;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// The sweep file: at least one of the two lists. The sweep runs every law with every load.
 #[derive(Debug, serde::Deserialize)]
@@ -85,7 +88,7 @@ pub fn run(
     }
     let build_s = t.elapsed().as_secs_f64();
     let t = std::time::Instant::now();
-    let rows = run::sweep(&model, &loads, &laws);
+    let rows = sweep(&model, &loads, &laws);
     let sweep_s = t.elapsed().as_secs_f64();
     let out_dir = out.unwrap_or_else(|| {
         PathBuf::from("out").join(format!(
@@ -162,4 +165,103 @@ pub fn table(rows: &[SweepRow]) -> String {
         );
     }
     s
+}
+
+/// One row of a sweep: a friction law run on the shared model.
+#[derive(Clone, Debug, Serialize)]
+pub struct SweepRow {
+    /// Index of the friction law and of the load (stage list) in the sweep file.
+    pub index: usize,
+    pub load_index: usize,
+    pub status: String,
+    pub steps: usize,
+    pub newton_iterations: usize,
+    /// Factorisations of the contact Newton solves (see [`Summary::lu_factorisations`]).
+    pub lu_factorisations: usize,
+    pub wall_s: f64,
+    /// Stick and transition semi-widths at the last converged step.
+    pub c: f64,
+    pub b: f64,
+    pub friction: Option<FrictionSummary>,
+    /// The self-checks of the last converged step (an error-level one fails the row).
+    pub checks: Vec<crate::checks::Check>,
+}
+
+/// Runs each of `loads` (cases that differ from the model's in their stages only) with each
+/// friction law on one built model, in parallel, and returns one row per (load, law) pair,
+/// loads outermost, in the order given. The model (assembly, factorisation, condensation,
+/// Delassus operator) is shared: stages change only the loads, never the matrices.
+pub fn sweep(
+    model: &Model,
+    loads: &[Case],
+    laws: &[crate::friction::FrictionLaw],
+) -> Vec<SweepRow> {
+    use rayon::prelude::*;
+    let jobs: Vec<(usize, usize)> = (0..loads.len())
+        .flat_map(|l| (0..laws.len()).map(move |i| (l, i)))
+        .collect();
+    jobs.par_iter()
+        .map(|&(load_index, index)| {
+            let (case, law) = (&loads[load_index], &laws[index]);
+            let t = Instant::now();
+            let res = simulate(model, case, Some(law), LogLevel::Error, &mut |_| Ok(()));
+            let wall_s = t.elapsed().as_secs_f64();
+            match res {
+                Ok(mut sim) => {
+                    let last = sim.records.last().and_then(|r| r.contact);
+                    let q_max = sim
+                        .records
+                        .iter()
+                        .filter_map(|r| r.pilot)
+                        .map(|p| p.fx.abs())
+                        .fold(0.0, f64::max);
+                    let friction = friction_summary(model, Some(law), last, q_max);
+                    let checks = final_checks(
+                        model,
+                        sim.last_u.take(),
+                        sim.last_state.as_ref(),
+                        sim.last_scale,
+                        &sim.records,
+                        friction.as_ref(),
+                    );
+                    if sim.failure.is_none() {
+                        sim.failure = failed_check(&checks);
+                    }
+                    let status = match (&sim.failure, sim.lost_equilibrium) {
+                        (None, _) => "completed".to_string(),
+                        (Some(_), Some((q, qf))) => {
+                            format!("equilibrium lost: Q_max = {q:.6} (none at {qf:.6})")
+                        }
+                        (Some(m), None) => format!("failed: {m}"),
+                    };
+                    SweepRow {
+                        index,
+                        load_index,
+                        status,
+                        steps: sim.records.len(),
+                        newton_iterations: sim.newton_iterations,
+                        lu_factorisations: sim.lu_factorisations,
+                        wall_s,
+                        c: last.map_or(0.0, |f| f.c),
+                        b: last.map_or(0.0, |f| f.b),
+                        friction,
+                        checks,
+                    }
+                }
+                Err(e) => SweepRow {
+                    index,
+                    load_index,
+                    status: format!("error: {e}"),
+                    steps: 0,
+                    newton_iterations: 0,
+                    lu_factorisations: 0,
+                    wall_s,
+                    c: 0.0,
+                    b: 0.0,
+                    friction: None,
+                    checks: Vec::new(),
+                },
+            }
+        })
+        .collect()
 }

@@ -243,7 +243,7 @@ fn newton_jacobian_matches_finite_differences() {
     use stickslip::case::Control;
     use stickslip::contact::solver::{Iterate, Method, State, Status};
     use stickslip::friction::FrictionLaw;
-    use stickslip::run::StepLoad;
+    use stickslip::model::StepLoad;
     // The model does not depend on the law (each solve takes it): built once.
     let (model, opt) = fig2_on_l1();
     let cm = model.contact.as_ref().unwrap();
@@ -392,7 +392,7 @@ fn structured_newton_solve_matches_the_dense_system() {
     use stickslip::case::Control;
     use stickslip::contact::solver::{Iterate, LuCache, Method, PilotDrive, Status};
     use stickslip::friction::FrictionLaw;
-    use stickslip::run::StepLoad;
+    use stickslip::model::StepLoad;
     let law = FrictionLaw::ramp(0.15, 0.1, 2e-3).unwrap();
     let (model, opt) = fig2_on_l1();
     let cm = model.contact.as_ref().unwrap();

@@ -7,7 +7,7 @@ use common::repo;
 use stickslip::case::{Case, Control};
 use stickslip::contact::solver::{Method, Options, Status};
 use stickslip::model::Model;
-use stickslip::run::StepLoad;
+use stickslip::model::StepLoad;
 
 const E_STAR: f64 = 109.890_109_890_109_9;
 const R_EFF: f64 = 4.0;

@@ -2,6 +2,7 @@
 //! Every file is written to a temporary name in the same directory and renamed into place, so
 //! a run that stops leaves either a whole file or none.
 
+pub mod fields;
 pub mod vtu;
 
 use std::io::Write;

@@ -1,6 +1,9 @@
 //! A model ready to solve: the checked mesh, the DOF numbering, the assembled and factorised
 //! stiffness, the condensed system on the retained DOFs and the load vectors.
 
+pub mod step;
+pub use step::StepLoad;
+
 use crate::assembly::{self, UpperCsc};
 use crate::case::{Case, TractionKind};
 use crate::condense::Condensed;

@@ -1,0 +1,274 @@
+//! One load step on the condensed model: the solve without contact (the pilot's two
+//! equations on the Schur complement), the contact solve from a committed state, the full
+//! displacement field of a contact state, and the contact figures (a, c, b, forces) of a state.
+
+use crate::case::Control;
+use crate::contact::solver::{self, ContactError, PilotDrive, State, Status};
+use crate::model::Model;
+use serde::Serialize;
+
+/// The state of the pilot after a step.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct PilotState {
+    pub ux: f64,
+    pub uy: f64,
+    pub fx: f64,
+    pub fy: f64,
+}
+
+/// Figures of the contact after a step.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct ContactFigures {
+    /// Nodes in contact, in stick, in slip.
+    pub n_contact: usize,
+    pub n_stick: usize,
+    pub n_slip: usize,
+    /// Contact semi-width (edges extrapolated with p² linear in x between the two outermost
+    /// contact nodes on each side).
+    pub a: f64,
+    /// Centre of the contact.
+    pub x_centre: f64,
+    /// Stick semi-width (each edge midway between the outermost stick node and the next node).
+    pub c: f64,
+    /// Semi-width of the zone where μ has not yet reached its dynamic value (midway rule).
+    pub b: f64,
+    /// Total contact force on the master side.
+    pub fx: f64,
+    pub fy: f64,
+    /// Mean slip over the contact (the quantity of slip control; see `State::mean_slip`).
+    pub mean_slip: f64,
+}
+
+/// The load of one step: the traction scale and the pilot's two controls.
+#[derive(Clone, Copy, Debug)]
+pub struct StepLoad {
+    pub scale: f64,
+    pub control: [Control; 2],
+}
+
+impl Model {
+    /// Solves one load step without contact: tractions at `scale`, the pilot driven by
+    /// `control`. Returns the free solution vector and the pilot state (if there is a pilot).
+    pub fn solve_step(
+        &self,
+        scale: f64,
+        control: [Control; 2],
+    ) -> Result<(Vec<f64>, Option<PilotState>), String> {
+        let f = self.load(scale);
+        let cond = &self.condensed;
+        if self.dofs.pilot.is_none() {
+            return Ok((cond.recover(&f, &[], &[]), None));
+        }
+        let g = cond.reduce(&f);
+        let (u, r) = solve_pilot(&cond.s_dense(), &g, control, cond.krr_scale)?;
+        Ok((
+            cond.recover(&f, &r, &u),
+            Some(PilotState {
+                ux: u[0],
+                uy: u[1],
+                fx: r[0],
+                fy: r[1],
+            }),
+        ))
+    }
+
+    /// The free load vector at traction scale `scale`.
+    pub fn load(&self, scale: f64) -> Vec<f64> {
+        self.f_traction
+            .iter()
+            .zip(&self.f_prescribed)
+            .map(|(a, b)| scale * a + b)
+            .collect()
+    }
+
+    /// Solves one load step with contact from the committed state `prev` (the contact unknowns
+    /// only; [`Model::contact_displacement`] recovers the full field when it is wanted).
+    pub fn solve_contact_step(
+        &self,
+        load: StepLoad,
+        prev: &State,
+        guess: Option<&State>,
+        opt: &solver::Options,
+        law: Option<&crate::friction::FrictionLaw>,
+        cache: Option<&mut solver::LuCache>,
+    ) -> Result<solver::StepOutcome, ContactError> {
+        let StepLoad { scale, control } = load;
+        let cm = self.contact.as_ref().expect("contact model");
+        let w0: Vec<f64> = self.contact_w0[0]
+            .iter()
+            .zip(&self.contact_w0[1])
+            .map(|(a, b)| scale * a + b)
+            .collect();
+        let drive = control.map(|c| match c {
+            Control::Force(f) => PilotDrive::Force(f),
+            Control::Displacement(d) => PilotDrive::Displacement(d),
+            Control::Slip(s) => PilotDrive::Slip(s),
+        });
+        cm.system
+            .solve_step(&w0, drive, law, prev, guess, opt, cache)
+    }
+
+    /// The displacement of all free DOFs for a contact state at traction scale `scale`: one
+    /// solve with the factorised stiffness.
+    pub fn contact_displacement(&self, scale: f64, st: &State) -> Vec<f64> {
+        let cm = self.contact.as_ref().expect("contact model");
+        let r = cm.retained_forces(st, self.dofs.n_retained);
+        self.condensed.recover_total(&self.load(scale), &r)
+    }
+
+    /// Contact figures of a state.
+    pub fn contact_figures(
+        &self,
+        st: &State,
+        law: Option<&crate::friction::FrictionLaw>,
+    ) -> ContactFigures {
+        let cm = self.contact.as_ref().expect("contact model");
+        let m = &cm.pair.mortar;
+        let xs: Vec<f64> = m
+            .slave_nodes
+            .iter()
+            .map(|&n| self.mesh.nodes[n][0])
+            .collect();
+        let p: Vec<f64> = (0..xs.len()).map(|j| st.f_n[j] / m.weight[j]).collect();
+        let on: Vec<usize> = (0..xs.len())
+            .filter(|&j| st.status[j] != Status::Open)
+            .collect();
+        let mut fig = ContactFigures {
+            n_contact: on.len(),
+            n_stick: st.status.iter().filter(|s| **s == Status::Stick).count(),
+            n_slip: st.status.iter().filter(|s| **s == Status::Slip).count(),
+            ..Default::default()
+        };
+        let r = cm.retained_forces(st, self.dofs.n_retained);
+        let (mut fx, mut fy) = (0.0, 0.0);
+        for &node in &m.master_nodes {
+            for c in 0..2 {
+                if let crate::dofs::Dof::Free(i) = self.dofs.node[node][c] {
+                    let k = i - self.dofs.n_interior;
+                    if c == 0 { fx += r[k] } else { fy += r[k] }
+                }
+            }
+        }
+        fig.fx = fx;
+        fig.fy = fy;
+        fig.mean_slip = st.mean_slip;
+        if on.is_empty() {
+            return fig;
+        }
+        let (lo, hi) = (on[0], *on.last().expect("non-empty"));
+        let edge = |j1: usize, j2: usize| -> f64 {
+            // p² linear in x through the two outermost nodes, extrapolated to zero.
+            let (a, b) = (p[j1].max(0.0).powi(2), p[j2].max(0.0).powi(2));
+            let dx = xs[j1] - xs[j2];
+            if b > a && dx != 0.0 {
+                {
+                    // at most one node spacing beyond the last contact node
+                    let ext = a / (b - a) * dx;
+                    xs[j1] + if dx > 0.0 { ext.min(dx) } else { ext.max(dx) }
+                }
+            } else {
+                xs[j1]
+            }
+        };
+        let left = if lo < hi { edge(lo, lo + 1) } else { xs[lo] };
+        let right = if hi > lo { edge(hi, hi - 1) } else { xs[hi] };
+        // The face may run in −x (a slave on the upper body): widths are absolute.
+        fig.a = 0.5 * (right - left).abs();
+        fig.x_centre = 0.5 * (right + left);
+        let half_width = |pred: &dyn Fn(usize) -> bool| -> f64 {
+            let idx: Vec<usize> = (0..xs.len()).filter(|&j| pred(j)).collect();
+            if idx.is_empty() {
+                return 0.0;
+            }
+            let (a, b) = (idx[0], *idx.last().expect("non-empty"));
+            let l = if a > 0 {
+                0.5 * (xs[a] + xs[a - 1])
+            } else {
+                xs[a]
+            };
+            let r = if b + 1 < xs.len() {
+                0.5 * (xs[b] + xs[b + 1])
+            } else {
+                xs[b]
+            };
+            0.5 * (r - l).abs()
+        };
+        fig.c = half_width(&|j| st.status[j] == Status::Stick);
+        if let Some(law) = law
+            && let Ok(fd) = law.f_dynamic()
+        {
+            let fs = law.f_static();
+            if fs > fd {
+                let tol = 1e-9 * (fs - fd);
+                fig.b =
+                    half_width(&|j| st.status[j] != Status::Open && law.mu(st.slip[j]) > fd + tol);
+            }
+        }
+        fig
+    }
+}
+
+/// Solves `S u = g + r` on the pilot DOFs with, per component, either the force `r` or the
+/// displacement `u` given. Returns (u, r). `scale` is the stiffness scale of the pilot
+/// before condensation: a pivot below 1e-10 of it means nothing holds the pilot.
+pub fn solve_pilot(
+    s: &[f64],
+    g: &[f64],
+    control: [Control; 2],
+    scale: f64,
+) -> Result<([f64; 2], [f64; 2]), String> {
+    let mut u = [0.0; 2];
+    let mut r = [0.0; 2];
+    let mut free = Vec::new();
+    for c in 0..2 {
+        match control[c] {
+            Control::Force(f) => {
+                r[c] = f;
+                free.push(c);
+            }
+            Control::Displacement(d) => u[c] = d,
+            Control::Slip(_) => {
+                return Err("slip control needs frictional contact".into());
+            }
+        }
+    }
+    // S_FF u_F = g_F + r_F − S_FD u_D
+    let rhs: Vec<f64> = free
+        .iter()
+        .map(|&i| {
+            g[i] + r[i]
+                - (0..2)
+                    .filter(|j| !free.contains(j))
+                    .map(|j| s[i * 2 + j] * u[j])
+                    .sum::<f64>()
+        })
+        .collect();
+    match free.len() {
+        1 => {
+            let i = free[0];
+            if s[i * 2 + i].abs() <= 1e-10 * scale {
+                return Err(singular());
+            }
+            u[i] = rhs[0] / s[i * 2 + i];
+        }
+        2 => {
+            let det = s[0] * s[3] - s[1] * s[2];
+            if s[0].abs().min(s[3].abs()) <= 1e-10 * scale || det.abs() <= 1e-10 * scale * scale {
+                return Err(singular());
+            }
+            u[0] = (s[3] * rhs[0] - s[1] * rhs[1]) / det;
+            u[1] = (s[0] * rhs[1] - s[2] * rhs[0]) / det;
+        }
+        _ => {}
+    }
+    for i in 0..2 {
+        r[i] = s[i * 2] * u[0] + s[i * 2 + 1] * u[1] - g[i];
+    }
+    Ok((u, r))
+}
+
+fn singular() -> String {
+    "the pilot is force-controlled but the body it drives is not held in that direction \
+     (no support and no contact): control it by displacement instead"
+        .into()
+}

@@ -1,0 +1,180 @@
+//! The fields written per step: the bodies' VTU (displacement, stresses), and the contact
+//! surface's VTU and CSV (pressure, shear, gap, slip, status, μ, q/p).
+
+use crate::case::Case;
+use crate::contact::solver::State;
+use crate::model::Model;
+use crate::output::{self, vtu};
+
+/// Per slave node: (p, q, gap, slip, slip increment, status, μ, q/p).
+fn contact_fields(model: &Model, st: &State) -> Vec<[f64; 8]> {
+    let m = &model.contact.as_ref().expect("contact").pair.mortar;
+    (0..m.slave_nodes.len())
+        .map(|j| {
+            let p = st.f_n[j] / m.weight[j];
+            // Shear traction on the slave body along its tangent (the master force is −F_t τ on the slave).
+            let q = -st.f_t[j] / m.weight[j];
+            let ratio = if p > 0.0 { q / p } else { 0.0 };
+            [
+                p,
+                q,
+                st.gap[j],
+                st.slip[j],
+                st.dv[j],
+                st.status[j].code(),
+                st.mu[j],
+                ratio,
+            ]
+        })
+        .collect()
+}
+
+const CONTACT_FIELDS: [&str; 8] = [
+    "pressure",
+    "shear",
+    "gap",
+    "slip",
+    "slip_increment",
+    "status",
+    "mu",
+    "q_over_p",
+];
+
+/// The contact dataset: the slave edges of the candidate zone with the nodal contact fields.
+pub fn contact_vtu(model: &Model, st: &State) -> Result<Vec<u8>, vtkio::Error> {
+    let cm = model.contact.as_ref().expect("contact");
+    let m = &cm.pair.mortar;
+    let mut index = std::collections::HashMap::new();
+    let mut points = Vec::new();
+    let mut node_ids = Vec::new();
+    for e in &cm.pair.zone_edges {
+        for &n in e {
+            index.entry(n).or_insert_with(|| {
+                points.push(model.mesh.nodes[n]);
+                node_ids.push(n);
+                points.len() - 1
+            });
+        }
+    }
+    let cells: Vec<Vec<usize>> = cm
+        .pair
+        .zone_edges
+        .iter()
+        .map(|e| e.iter().map(|n| index[n]).collect())
+        .collect();
+    let fields = contact_fields(model, st);
+    let slot: std::collections::HashMap<usize, usize> = m
+        .slave_nodes
+        .iter()
+        .enumerate()
+        .map(|(j, &n)| (n, j))
+        .collect();
+    let mut data: Vec<vtu::Field> = CONTACT_FIELDS
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            vtu::Field::scalar(
+                name,
+                node_ids
+                    .iter()
+                    .map(|n| slot.get(n).map_or(0.0, |&j| fields[j][k]))
+                    .collect(),
+            )
+        })
+        .collect();
+    let mut traction = Vec::new();
+    let mut normal = Vec::new();
+    for n in &node_ids {
+        match slot.get(n) {
+            Some(&j) => {
+                let (p, q) = (fields[j][0], fields[j][1]);
+                let (nv, tv) = (m.normal[j], m.tangent[j]);
+                // Traction on the slave body: pressure pushes against its outward normal.
+                traction.extend([-p * nv[0] + q * tv[0], -p * nv[1] + q * tv[1], 0.0]);
+                normal.extend([nv[0], nv[1], 0.0]);
+            }
+            None => {
+                traction.extend([0.0; 3]);
+                normal.extend([0.0; 3]);
+            }
+        }
+    }
+    data.push(vtu::Field::vector("traction", traction));
+    data.push(vtu::Field::vector("normal", normal));
+    vtu::unstructured("contact", &points, &cells, vtu::Kind::Line3, data, vec![])
+}
+
+/// The per-step CSV along the slave face.
+pub fn contact_csv(model: &Model, st: &State) -> String {
+    let m = &model.contact.as_ref().expect("contact").pair.mortar;
+    let fields = contact_fields(model, st);
+    let rows: Vec<Vec<f64>> = m
+        .slave_nodes
+        .iter()
+        .zip(&fields)
+        .map(|(&n, f)| {
+            let x = model.mesh.nodes[n];
+            let mut r = vec![x[0], x[1]];
+            r.extend_from_slice(f);
+            r
+        })
+        .collect();
+    let mut header = vec!["x", "y"];
+    header.extend(CONTACT_FIELDS);
+    output::csv(&header, &rows, &["status"])
+}
+
+/// The bodies dataset of one step: displacement, stresses, von Mises, body id.
+pub fn bodies_vtu(model: &Model, u: &[f64], case: &Case) -> Result<Vec<u8>, vtkio::Error> {
+    let mut index = vec![usize::MAX; model.mesh.nodes.len()];
+    let mut points = Vec::new();
+    for (n, &a) in model.active.iter().enumerate() {
+        if a {
+            index[n] = points.len();
+            points.push(model.mesh.nodes[n]);
+        }
+    }
+    let stress = model.nodal_stresses(u);
+    let mut disp = Vec::with_capacity(points.len() * 3);
+    let (mut sxx, mut syy, mut sxy, mut szz, mut vm) = (vec![], vec![], vec![], vec![], vec![]);
+    for (n, &a) in model.active.iter().enumerate() {
+        if !a {
+            continue;
+        }
+        let d = model.dofs.displacement(n, u);
+        disp.extend([d[0], d[1], 0.0]);
+        let s = stress[n];
+        sxx.push(s[0]);
+        syy.push(s[1]);
+        sxy.push(s[2]);
+        szz.push(s[3]);
+        vm.push(crate::elasticity::von_mises(s[0], s[1], s[2], s[3]));
+    }
+    let cells: Vec<Vec<usize>> = model
+        .elems
+        .iter()
+        .map(|(e, _)| {
+            model.mesh.triangles[*e]
+                .nodes
+                .iter()
+                .map(|&n| index[n])
+                .collect()
+        })
+        .collect();
+    let body: Vec<f64> = model.elem_body.iter().map(|&b| b as f64).collect();
+    vtu::unstructured(
+        &case.title,
+        &points,
+        &cells,
+        vtu::Kind::Tri6,
+        vec![
+            vtu::Field::vector("displacement", disp),
+            vtu::Field::scalar("stress_xx", sxx),
+            vtu::Field::scalar("stress_yy", syy),
+            vtu::Field::scalar("stress_xy", sxy),
+            vtu::Field::scalar("stress_zz", szz),
+            vtu::Field::scalar("von_mises", vm),
+        ],
+        vec![vtu::Field::scalar("body_id", body)],
+    )
+}

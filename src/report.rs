@@ -1,0 +1,281 @@
+//! What a run reports: the record of each step, the friction summary (Q_max, Λ, χ, Ψ, s0 and
+//! the closed forms through [`crate::analytic`]), the self-checks of the last converged step,
+//! `summary.json` and the one-screen end summary.
+
+use crate::contact::solver::State;
+use crate::model::Model;
+use crate::model::step::{ContactFigures, PilotState};
+use serde::Serialize;
+use std::path::Path;
+
+/// One converged load step.
+#[derive(Clone, Debug, Serialize)]
+pub struct StepRecord {
+    pub step: usize,
+    pub stage: usize,
+    pub time: f64,
+    pub traction_scale: f64,
+    pub pilot: Option<PilotState>,
+    pub iterations: usize,
+    pub cutbacks: usize,
+    pub contact: Option<ContactFigures>,
+    pub wall_s: f64,
+}
+
+/// The friction law and the paper's scales of the run (eqs. Maugis, Maugis10, Lambda, s0).
+#[derive(Clone, Debug, Serialize)]
+pub struct FrictionSummary {
+    pub law: crate::friction::FrictionLaw,
+    pub f_s: f64,
+    pub f_d: Option<f64>,
+    /// Slip length Δ and fracture energy per unit pressure W/p (slip-weakening laws).
+    pub delta: Option<f64>,
+    pub w_over_p: Option<f64>,
+    /// Normal load P (contact force along the common normal at the last step), effective
+    /// radius R (fitted to the initial gap, g0 ≈ t²/2R) and Hertz semi-width a.
+    pub load: f64,
+    pub radius: f64,
+    pub a_hertz: f64,
+    pub lambda: Option<f64>,
+    pub chi: Option<f64>,
+    pub psi: Option<f64>,
+    /// Small-scale transition length at the centre, s0 = 2Λa/π, over a.
+    pub s0_over_a: Option<f64>,
+    /// Largest slave element in the contact, and whether it resolves s0 (h ≤ s0/2).
+    pub h_contact: f64,
+    pub resolved: Option<bool>,
+    /// The largest tangential load reached (|pilot force| along the tangent), and the apparent
+    /// static friction coefficient Q_max/P it implies.
+    pub q_max: f64,
+    pub apparent_friction: f64,
+    /// Closed-form predictions of Q_max/P: the JKR limit (eq. QJKR at its maximum, with Ψ) and
+    /// the double Cattaneo–Mindlin maximum (with Λ).
+    pub apparent_friction_jkr: Option<f64>,
+    pub apparent_friction_dcm: Option<f64>,
+}
+
+/// What `summary.json` holds.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    pub case: String,
+    pub title: String,
+    pub mesh: String,
+    pub nodes: usize,
+    pub triangles: usize,
+    pub dofs_free: usize,
+    pub dofs_retained: usize,
+    pub contact_nodes: usize,
+    pub candidate_gap: Option<f64>,
+    pub stiffness_nonzeros_upper: usize,
+    pub threads: usize,
+    pub timings_s: crate::model::Timings,
+    /// Time in the contact iterations (part of `timings_s.solve`).
+    pub contact_solve_s: f64,
+    pub newton_iterations: usize,
+    /// Dense factorisations and GMRES iterations of the contact Newton solves.
+    pub lu_factorisations: usize,
+    pub gmres_iterations: usize,
+    pub peak_memory_mib: Option<f64>,
+    pub friction: Option<FrictionSummary>,
+    /// Self-checks of the last converged step (see [`crate::checks`]).
+    pub checks: Vec<crate::checks::Check>,
+    pub steps: Vec<StepRecord>,
+    pub output_dir: String,
+    /// `completed`, or why the run stopped early.
+    pub status: String,
+}
+
+/// The self-checks of the last converged step (none when no step converged).
+pub(crate) fn final_checks(
+    model: &Model,
+    last_u: Option<Vec<f64>>,
+    last_state: Option<&State>,
+    last_scale: f64,
+    records: &[StepRecord],
+    friction: Option<&FrictionSummary>,
+) -> Vec<crate::checks::Check> {
+    let u = match (last_u, last_state) {
+        (Some(u), _) => u,
+        (None, Some(st)) => model.contact_displacement(last_scale, st),
+        (None, None) => return Vec::new(),
+    };
+    crate::checks::run_checks(&crate::checks::Input {
+        model,
+        u: &u,
+        scale: last_scale,
+        state: last_state,
+        records,
+        friction,
+    })
+}
+
+/// The failure an error-level check makes of a run that otherwise completed.
+pub(crate) fn failed_check(checks: &[crate::checks::Check]) -> Option<String> {
+    checks
+        .iter()
+        .find(|c| c.level == crate::checks::Level::Error)
+        .map(|c| {
+            format!(
+                "the last step: check `{}` failed ({:.3e} against {:.3e}): {}",
+                c.name, c.value, c.limit, c.note
+            )
+        })
+}
+
+/// The one-screen summary printed at the end of a run.
+pub fn end_summary(case_path: &Path, s: &Summary, out_dir: &Path, stem: &str) -> String {
+    let mut o = String::new();
+    let t = &s.timings_s;
+    o += &format!(
+        "stickslip: {} — {} ({} steps)\n",
+        case_path.display(),
+        s.status,
+        s.steps.len()
+    );
+    o += &format!(
+        "  mesh      {}: {} triangles, {} nodes, {} DOFs ({} retained)\n",
+        s.mesh, s.triangles, s.nodes, s.dofs_free, s.dofs_retained
+    );
+    if let Some(c) = s.steps.last().and_then(|r| r.contact) {
+        o += &format!(
+            "  contact   a = {:.5}, c = {:.5}, b = {:.5}; {} nodes in contact ({} stick, {} slip); force ({:.5}, {:.5})\n",
+            c.a, c.c, c.b, c.n_contact, c.n_stick, c.n_slip, c.fx, c.fy
+        );
+    }
+    if let Some(f) = &s.friction {
+        let opt = |v: Option<f64>| v.map_or("–".to_string(), |x| format!("{x:.4}"));
+        o += &format!(
+            "  friction  f_s = {}, f_d = {}, Δ = {}: Λ = {}, χ = {}, Ψ = {}, s0/a = {}{}\n",
+            f.f_s,
+            opt(f.f_d),
+            f.delta.map_or("–".into(), |d| format!("{d:.3e}")),
+            opt(f.lambda),
+            opt(f.chi),
+            opt(f.psi),
+            opt(f.s0_over_a),
+            match f.resolved {
+                Some(true) => " (resolved)",
+                Some(false) => " (NOT resolved by the mesh)",
+                None => "",
+            }
+        );
+        let peaked = s.status.starts_with("equilibrium lost")
+            || s.steps
+                .last()
+                .and_then(|r| r.pilot)
+                .is_some_and(|p| p.fx.abs() < f.q_max - 1e-9 * f.q_max.max(1.0));
+        o += &format!(
+            "  Q_max/P   {} (JKR {}, double C–M {}){}\n",
+            format_args!("{:.5}", f.apparent_friction),
+            opt(f.apparent_friction_jkr),
+            opt(f.apparent_friction_dcm),
+            if peaked {
+                ": the peak was reached"
+            } else {
+                ": largest load applied; the peak was not reached"
+            }
+        );
+    }
+    if s.newton_iterations > 0 {
+        o += &format!(
+            "  Newton    {} iterations, {} factorisations, {} GMRES iterations, {:.3} s\n",
+            s.newton_iterations, s.lu_factorisations, s.gmres_iterations, s.contact_solve_s
+        );
+    }
+    o += &format!(
+        "  time      read {:.3}, assemble {:.3}, analyse {:.3}, factorise {:.3}, condense {:.3}, solve {:.3}, write {:.3} s; peak memory {}\n",
+        t.read,
+        t.assemble,
+        t.analyse,
+        t.factorise,
+        t.condense,
+        t.solve,
+        t.write,
+        s.peak_memory_mib
+            .map_or("unknown".into(), |m| format!("{m:.0} MiB"))
+    );
+    o += &format!(
+        "  output    {} ({stem}.pvd, history.csv, summary.json)\n",
+        out_dir.display()
+    );
+    o
+}
+
+/// The friction summary of a run: the law's Δ and W/p and the paper's scales Λ, χ, Ψ, s0 for
+/// the load the run reached.
+pub fn friction_summary(
+    model: &Model,
+    law: Option<&crate::friction::FrictionLaw>,
+    last: Option<ContactFigures>,
+    q_max: f64,
+) -> Option<FrictionSummary> {
+    let law = law?.clone();
+    let cm = model.contact.as_ref()?;
+    let fig = last?;
+    let n0 = cm.pair.common_normal.unwrap_or([0.0, 1.0]);
+    let load = (fig.fx * n0[0] + fig.fy * n0[1]).abs();
+    // Effective radius from the initial gaps of the zone nodes: g0 ≈ t²/(2R), t along the face.
+    let (radius, x0, tau, _) = crate::checks::fit_radius(model, None)?;
+    let a_hertz = crate::checks::hertz_a(load, radius, cm.e_star);
+    let fs = law.f_static();
+    let fd = law.f_dynamic().ok();
+    let weakening = fd.filter(|fd| fs > *fd);
+    let delta = weakening.and_then(|_| law.delta().ok());
+    let w_over_p = weakening.and_then(|_| law.w_over_p().ok());
+    let lambda = match (weakening, delta) {
+        (Some(fd), Some(d)) if a_hertz > 0.0 => Some(radius * d / ((fs - fd) * a_hertz * a_hertz)),
+        _ => None,
+    };
+    let ratio = weakening.map(|fd| fs / fd - 1.0);
+    let chi = lambda.zip(ratio).map(|(l, r)| r * l);
+    let psi = lambda.zip(ratio).map(|(l, r)| r * r * l);
+    let s0_over_a = lambda.map(|l| 2.0 * l / std::f64::consts::PI);
+    let h_contact = cm
+        .pair
+        .zone_edges
+        .iter()
+        .filter(|e| {
+            let x = model.mesh.nodes[e[2]];
+            ((x[0] - x0[0]) * tau[0] + (x[1] - x0[1]) * tau[1]).abs() <= a_hertz
+        })
+        .map(|e| {
+            let (p, q) = (model.mesh.nodes[e[0]], model.mesh.nodes[e[1]]);
+            (p[0] - q[0]).hypot(p[1] - q[1])
+        })
+        .fold(0.0, f64::max);
+    let resolved = s0_over_a.map(|s| h_contact <= 0.5 * s * a_hertz);
+    // Closed-form apparent friction Q_max/P (eqs. QJKR and Qx at their maxima, Fig. 6).
+    let closed = match (weakening, chi) {
+        (Some(fd), Some(chi)) => crate::analytic::apparent::apparent(chi, fs / fd, true)
+            .ok()
+            .map(|p| (p.q_max_jkr * fd, p.q_max_dcm.map(|q| q * fd))),
+        _ => None,
+    };
+    let apparent_friction_jkr = closed
+        .map(|c| c.0)
+        .or(if weakening.is_none() { fd } else { None });
+    let apparent_friction_dcm =
+        closed
+            .and_then(|c| c.1)
+            .or(if weakening.is_none() { fd } else { None });
+    Some(FrictionSummary {
+        law,
+        f_s: fs,
+        f_d: fd,
+        delta,
+        w_over_p,
+        load,
+        radius,
+        a_hertz,
+        lambda,
+        chi,
+        psi,
+        s0_over_a,
+        h_contact,
+        resolved,
+        q_max,
+        apparent_friction: if load > 0.0 { q_max / load } else { 0.0 },
+        apparent_friction_jkr,
+        apparent_friction_dcm,
+    })
+}
