@@ -176,6 +176,15 @@ pub fn simulate(
         // The state before the last converged one, with its load fraction (none across stages).
         let mut older: Option<(f64, State)> = None;
         let mut cutbacks = 0;
+        // A stage that changes no load (a hold): every step of it keeps the converged state.
+        let hold = stage.traction_scale.is_none_or(|v| v == start.1)
+            && (0..2).all(|c| match (target[c], start.2[c]) {
+                (None, _) => true,
+                (Some(Control::Force(f)), Control::Force(f0)) => f == f0,
+                (Some(Control::Displacement(d)), _) => d == [start.0.ux, start.0.uy][c],
+                (Some(Control::Slip(s)), _) => s == start.3,
+                (Some(Control::Force(_)), _) => false,
+            });
         while alpha < 1.0 - 1e-12 {
             let a_new = (alpha + dalpha).min(1.0);
             let t = Instant::now();
@@ -188,11 +197,18 @@ pub fn simulate(
             let mut ctl = control;
             for c in 0..2 {
                 ctl[c] = match (target[c], start.2[c]) {
+                    // A force that was prescribed carries on from its prescribed value (the
+                    // converged pilot force differs from it by the solver's tolerance: starting
+                    // from that would load a hold stage); one that was measured (the pilot
+                    // was displacement- or slip-controlled) from the measured force.
+                    (Some(Control::Force(f)), Control::Force(f0)) => {
+                        Control::Force(f0 + a_new * (f - f0))
+                    }
                     (Some(Control::Force(f)), _) => Control::Force(r0[c] + a_new * (f - r0[c])),
                     (Some(Control::Displacement(d)), _) => {
                         Control::Displacement(u0[c] + a_new * (d - u0[c]))
                     }
-                    (None, Control::Force(_)) => Control::Force(r0[c]),
+                    (None, Control::Force(f0)) => Control::Force(f0),
                     (None, Control::Displacement(_)) => Control::Displacement(u0[c]),
                     (Some(Control::Slip(s)), _) => Control::Slip(m0 + a_new * (s - m0)),
                     (None, Control::Slip(_)) => Control::Slip(m0),
@@ -225,17 +241,31 @@ pub fn simulate(
                         g.z = ext(&prev.z, &old.z);
                         g
                     });
-                let res = model.solve_contact_step(
-                    StepLoad {
-                        scale: sc,
-                        control: ctl,
-                    },
-                    prev,
-                    guess.as_ref(),
-                    opt,
-                    law.as_ref(),
-                    Some(&mut lu_cache),
-                );
+                let res = if !records.is_empty() && hold {
+                    // A step that changes no load (a hold) from a converged state: that state
+                    // is its answer, with no slip in the step (rate-independent friction). A
+                    // Newton solve could cycle at the tolerance between nodes on the Coulomb
+                    // limit and be mistaken for a lost equilibrium.
+                    let mut state = prev.clone();
+                    state.dv.iter_mut().for_each(|v| *v = 0.0);
+                    Ok(solver::StepOutcome {
+                        state,
+                        iterations: 0,
+                        last_update: 0.0,
+                    })
+                } else {
+                    model.solve_contact_step(
+                        StepLoad {
+                            scale: sc,
+                            control: ctl,
+                        },
+                        prev,
+                        guess.as_ref(),
+                        opt,
+                        law.as_ref(),
+                        Some(&mut lu_cache),
+                    )
+                };
                 t_contact += tc.elapsed().as_secs_f64();
                 // A converged answer of an unheld body is a failed step: under force control
                 // the cutbacks then bracket the load that lost equilibrium.
@@ -286,9 +316,12 @@ pub fn simulate(
                         // A force-controlled tangential load that no equilibrium carries: the
                         // cutbacks bisect between the last converged load and this one; a failure
                         // that survives all of them is reported as the loss of equilibrium.
+                        // (Only when the step raised that load: a step that failed at the
+                        // load of the last converged one is a solver failure, not a peak.)
                         let lost = matches!(ctl[0], Control::Force(_))
                             && matches!(target[0], Some(Control::Force(_)))
-                            && law.is_some();
+                            && law.is_some()
+                            && ctl[0] != control[0];
                         if lost {
                             bracket = Some((
                                 pilot.fx,

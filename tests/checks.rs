@@ -142,3 +142,34 @@ fn nearly_incompressible_contact_keeps_the_hertz_width() {
     let fitted = check(&s, "hertz_a")["value"].as_f64().unwrap();
     assert!(fitted < 0.0025, "hertz_a check {fitted}");
 }
+
+/// A hold stage (no load changes) after a normal load applied in one step, on a pair with
+/// β ≠ 0 and Coulomb friction (mild steel pad on zinc): it completes with the same state and no
+/// slip. It used to end in "equilibrium lost, Q_max = 0" (the hold re-applied the converged
+/// pilot force instead of the prescribed one, a 1e-9 unloading on which Newton cycled).
+#[test]
+fn a_hold_stage_keeps_the_state() {
+    let dir = tempdir("checks-hold");
+    let case = json!({
+        "mesh": mesh_path("pad_flat.msh"),
+        "bodies": [{"group": "lower_body", "E": 108000.0, "nu": 0.25},
+                   {"group": "upper_body", "E": 207000.0, "nu": 0.3}],
+        "supports": [{"group": "bottom", "ux": 0.0, "uy": 0.0}],
+        "pilot": {"group": "top"},
+        "contact": {"slave": "lower_arc", "master": "upper_arc", "candidate_gap": 0.000186,
+                    "friction": {"shape": "constant", "mu": 0.3}},
+        "stages": [{"steps": 1, "pilot_x": {"force": 0.0}, "pilot_y": {"force": -15.0}},
+                   {"steps": 2, "pilot_x": {"force": 0.0}}]
+    });
+    let r = run_case_in(&dir, "case.json", &case.to_string(), &["--quiet"]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let h = r.history();
+    assert_eq!(h.rows.len(), 3);
+    for col in ["pilot_uy", "pilot_fy", "n_contact", "n_slip", "a"] {
+        let k = h.col(col);
+        assert_eq!(h.rows[0][k], h.rows[2][k], "{col} changed during the hold");
+    }
+    let last = r.last_contact();
+    let k = last.col("slip_increment");
+    assert!(last.rows.iter().all(|row| row[k] == 0.0));
+}
