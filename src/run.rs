@@ -197,18 +197,11 @@ pub fn simulate(
             let mut ctl = control;
             for c in 0..2 {
                 ctl[c] = match (target[c], start.2[c]) {
-                    // A force that was prescribed carries on from its prescribed value (the
-                    // converged pilot force differs from it by the solver's tolerance: starting
-                    // from that would load a hold stage); one that was measured (the pilot
-                    // was displacement- or slip-controlled) from the measured force.
-                    (Some(Control::Force(f)), Control::Force(f0)) => {
-                        Control::Force(f0 + a_new * (f - f0))
-                    }
                     (Some(Control::Force(f)), _) => Control::Force(r0[c] + a_new * (f - r0[c])),
                     (Some(Control::Displacement(d)), _) => {
                         Control::Displacement(u0[c] + a_new * (d - u0[c]))
                     }
-                    (None, Control::Force(f0)) => Control::Force(f0),
+                    (None, Control::Force(_)) => Control::Force(r0[c]),
                     (None, Control::Displacement(_)) => Control::Displacement(u0[c]),
                     (Some(Control::Slip(s)), _) => Control::Slip(m0 + a_new * (s - m0)),
                     (None, Control::Slip(_)) => Control::Slip(m0),

@@ -145,8 +145,9 @@ fn nearly_incompressible_contact_keeps_the_hertz_width() {
 
 /// A hold stage (no load changes) after a normal load applied in one step, on a pair with
 /// β ≠ 0 and Coulomb friction (mild steel pad on zinc): it completes with the same state and no
-/// slip. It used to end in "equilibrium lost, Q_max = 0" (the hold re-applied the converged
-/// pilot force instead of the prescribed one, a 1e-9 unloading on which Newton cycled).
+/// slip. It used to end in "equilibrium lost, Q_max = 0": the hold re-applied the converged
+/// pilot force (1e-9 off the prescribed one), Newton cycled on that tiny unloading, and the
+/// failure was taken for a peak.
 #[test]
 fn a_hold_stage_keeps_the_state() {
     let dir = tempdir("checks-hold");
