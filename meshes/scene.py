@@ -74,7 +74,8 @@ def parse(argv):
     p.add_argument("--s0", type=float, help="slip-weakening transition length s0")
     p.add_argument("--lambda", dest="lam", type=float, help="Lambda of the law (s0 = 2 Lambda a/pi)")
     p.add_argument("--h-contact", type=float, help="element size along the fine zone")
-    p.add_argument("--x-fine", type=float, help="half-width of the fine zone (default 1.5 a)")
+    p.add_argument("--x-fine", type=float, help="half-width of the fine zone (default FINE_FACTOR a)")
+    p.add_argument("--fine-factor", type=float, default=1.5, help="default x_fine = FINE_FACTOR * a (1.5)")
     p.add_argument("--per-a", type=float, default=24.0, help="default h_contact = a / PER_A (24)")
     p.add_argument("--per-s0", type=float, default=2.0, help="and h_contact <= s0 / PER_S0 (2)")
     p.add_argument("--depth", type=float, help="depth of each body (default 20 a, capped at R)")
@@ -114,8 +115,8 @@ def sizes(o):
     if h is None:
         h = a / o.per_a
         if s0 is not None:
-            h = min(h, positive("s0", s0) / o.per_s0)
-    x_fine = o.x_fine if o.x_fine is not None else 1.5 * a
+            h = min(h, 0.97 * positive("s0", s0) / o.per_s0)
+    x_fine = o.x_fine if o.x_fine is not None else o.fine_factor * a
     depth = o.depth if o.depth is not None else o.depth_factor * a
     d1 = min(r1, positive("depth", depth))
     d2 = min(r2, depth)
