@@ -38,7 +38,7 @@ use stickslip::analytic::scales;
 
 /// Number of scenes and the seed of their draw.
 const SCENES: usize = 24;
-const SEED: u64 = 0x5eed_272;
+const SEED: u64 = 0x05ee_d272;
 /// Steps of the normal stage (its last step is written: `output.every`).
 const NORMAL_STEPS: usize = 10;
 /// Wall-clock limit of one `stickslip run`.
@@ -52,7 +52,7 @@ const RUN_TIMEOUT: Duration = Duration::from_secs(240);
 const A_TOL: f64 = 0.005;
 const A_BETA2: f64 = 1.0;
 /// |p0_FE/p0 − 1| ≤ P_TOL + P_BETA2 β². Measured worst: 0.16 % with β = 0; with β ≠ 0 p0 is
-/// 0.9 β² above Hertz (4.32 % at β = −0.215; 0.88 β² above P_TOL). An independent half-plane
+/// 0.9 β² above Hertz (4.34 % at β = −0.215; 0.89 β² above P_TOL). An independent half-plane
 /// influence-coefficient solution of the same monotonic, frictional normal load at β = 0.13
 /// gives −0.77 % in a and +1.49 % in p0 (the FE: −0.98 %, +1.55 %).
 const P_TOL: f64 = 0.0025;
@@ -61,9 +61,13 @@ const P_BETA2: f64 = 1.3;
 /// the outermost stick node and the next (node spacing h/2), so it is quantised to ±h/4.
 /// Measured worst 0.26 h.
 const C_TOL: f64 = 0.375;
-/// |Q_max,FE/Q_max,JKR − 1| ≤ Q_TOL (β = 0). Measured worst 0.58 % (a step law; ramp and
-/// exponential laws: 0.07 %).
-const Q_TOL: f64 = 0.009;
+/// |Q_max,FE/Q_max,JKR − 1| ≤ Q_TOL (β = 0) for the ramp and exponential laws. Measured worst
+/// 0.20 % (exponential; ramp 0.07 %).
+const Q_TOL: f64 = 0.003;
+/// The same for the step law, whose jump in μ no mesh resolves: Q_max converges slowly from
+/// above (scene 11: +0.91 % at h = s0/2, +0.63 % at s0/3, +0.50 % at s0/4; the ramp law on the
+/// same scene −0.04 % throughout). Measured worst +0.91 %.
+const Q_TOL_STEP: f64 = 0.014;
 
 /// SplitMix64: a small, fixed pseudo-random sequence (no crate needed).
 struct Rng(u64);
@@ -235,7 +239,8 @@ fn draw() -> Vec<Scene> {
                 let fs = rng.uniform(0.3, 0.6);
                 let fd = fs / rng.uniform(1.3, 2.5);
                 Law::Weakening {
-                    shape: ["ramp", "step", "exponential"][(id / 3) % 3],
+                    // k = id/3 sets the pair (k % 3); the shape cycles independently of it
+                    shape: ["ramp", "step", "exponential"][(id / 3 + id / 9) % 3],
                     fs,
                     fd,
                     lambda: rng.log_uniform(0.03, 0.06),
@@ -453,7 +458,31 @@ fn run_scene(s: &Scene, root: &Path) -> Outcome {
     if let Some(row) = hist.rows.iter().rfind(|r| r[stage] == 0.0) {
         o.a = row[a_col];
         let step = row[0] as usize;
-        let file = out.join(format!("contact_{step:04}.csv"));
+        let mut file = out.join(format!("contact_{step:04}.csv"));
+        if !file.exists() {
+            // Cut-backs in the normal stage moved its end off `output.every`: the normal
+            // stage alone again (the same steps), every step written.
+            let mut v = case(s);
+            v["stages"].as_array_mut().unwrap().truncate(1);
+            v["output"] = json!({"every": 1});
+            let p = dir.join("normal.json");
+            std::fs::write(&p, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+            let n_out = dir.join("out_normal");
+            let (code, _, err) = run_with_timeout(
+                Command::new(env!("CARGO_BIN_EXE_stickslip")).args([
+                    "run",
+                    p.to_str().unwrap(),
+                    "--out",
+                    n_out.to_str().unwrap(),
+                    "--quiet",
+                    "--threads",
+                    "1",
+                ]),
+                RUN_TIMEOUT,
+            );
+            assert_eq!(code, 0, "scene {}: normal stage alone: {err}", s.id);
+            file = n_out.join(format!("contact_{step:04}.csv"));
+        }
         if file.exists() {
             let c = Table::read(&file);
             let (ip, is) = (c.col("pressure"), c.col("slip"));
@@ -464,6 +493,11 @@ fn run_scene(s: &Scene, root: &Path) -> Outcome {
     o.c = hist.last("c");
     o.q_last = hist.last("pilot_fx");
     o
+}
+
+/// `value ≤ limit`, false for NaN.
+fn within(value: f64, limit: f64) -> bool {
+    value <= limit
 }
 
 /// `value/reference − 1`.
@@ -526,7 +560,7 @@ fn random_scenes_match_the_closed_forms() {
     );
     println!("|{}", "---|".repeat(17));
     let mut failures = Vec::new();
-    let mut worst = [0.0f64; 6];
+    let mut worst = [0.0f64; 7];
     for (s, o) in scenes.iter().zip(&results) {
         let h = s.hertz();
         let beta = s.beta();
@@ -550,7 +584,7 @@ fn random_scenes_match_the_closed_forms() {
                 if b0 {
                     let dc = (o.c - c_cm).abs() / o.h;
                     worst[4] = worst[4].max(dc);
-                    if !(dc <= C_TOL) {
+                    if !within(dc, C_TOL) {
                         fail(format!(
                             "c = {:.5e} vs Cattaneo–Mindlin {c_cm:.5e}: {dc:.3} h > {C_TOL} h",
                             o.c
@@ -558,7 +592,7 @@ fn random_scenes_match_the_closed_forms() {
                     }
                 }
             }
-            Law::Weakening { fs, fd, .. } => {
+            Law::Weakening { shape, fs, fd, .. } => {
                 q_jkr = s.q_jkr().unwrap();
                 if o.code != 5 || !o.stderr.contains("equilibrium lost") {
                     fail(format!(
@@ -570,23 +604,28 @@ fn random_scenes_match_the_closed_forms() {
                 let f = &o.summary["friction"];
                 let s0 = f["s0_over_a"].as_f64().unwrap_or(f64::NAN)
                     * f["a_hertz"].as_f64().unwrap_or(f64::NAN);
-                if !(o.h <= 0.5 * s0) || f["resolved"] != json!(true) {
+                if !within(o.h, 0.5 * s0) || f["resolved"] != json!(true) {
                     fail(format!("s0 not resolved: h = {:.3e}, s0 = {s0:.3e}", o.h));
                 }
                 let dq = rel(o.q_max, q_jkr);
                 if b0 {
-                    worst[5] = worst[5].max(dq.abs());
-                    if !(dq.abs() <= Q_TOL) {
+                    let (k, lim) = if *shape == "step" {
+                        (6, Q_TOL_STEP)
+                    } else {
+                        (5, Q_TOL)
+                    };
+                    worst[k] = worst[k].max(dq.abs());
+                    if !within(dq.abs(), lim) {
                         fail(format!(
                             "Q_max = {:.6e} vs JKR {q_jkr:.6e}: {:+.3} % (limit {:.3} %)",
                             o.q_max,
                             100.0 * dq,
-                            100.0 * Q_TOL
+                            100.0 * lim
                         ));
                     }
                 } else {
                     // The JKR limit assumes β = 0: μ = f_s everywhere until Q acts. With β ≠ 0
-                    // the normal load already slips the contact edges (measured up to 3.7 Δ,
+                    // the normal load already slips the contact edges (measured up to 4.2 Δ,
                     // μ there down to ≈ f_d), so only the bounds of any law with
                     // f_d ≤ μ ≤ f_s hold.
                     let p = h.p_load;
@@ -602,7 +641,7 @@ fn random_scenes_match_the_closed_forms() {
         let k = if b0 { 0 } else { 2 };
         worst[k] = worst[k].max(da.abs());
         worst[k + 1] = worst[k + 1].max(dp.abs());
-        if !(da.abs() <= a_lim) {
+        if !within(da.abs(), a_lim) {
             fail(format!(
                 "a = {:.6e} vs Hertz {:.6e}: {:+.3} % (limit {:.3} %)",
                 o.a,
@@ -611,7 +650,7 @@ fn random_scenes_match_the_closed_forms() {
                 100.0 * a_lim
             ));
         }
-        if !(dp.abs() <= p_lim) {
+        if !within(dp.abs(), p_lim) {
             fail(format!(
                 "p0 = {:.6e} vs Hertz {:.6e}: {:+.3} % (limit {:.3} %)",
                 o.p0,
@@ -673,13 +712,14 @@ fn random_scenes_match_the_closed_forms() {
         );
     }
     println!(
-        "worst: β = 0: |Δa| {:.3} %, |Δp0| {:.3} %; β ≠ 0: |Δa| {:.3} %, |Δp0| {:.3} %; |c − c_CM| {:.3} h (β = 0); |ΔQ_max| {:.3} % (β = 0)",
+        "worst: β = 0: |Δa| {:.3} %, |Δp0| {:.3} %; β ≠ 0: |Δa| {:.3} %, |Δp0| {:.3} %; |c − c_CM| {:.3} h (β = 0); |ΔQ_max| (β = 0) {:.3} % (ramp, exponential), {:.3} % (step)",
         100.0 * worst[0],
         100.0 * worst[1],
         100.0 * worst[2],
         100.0 * worst[3],
         worst[4],
-        100.0 * worst[5]
+        100.0 * worst[5],
+        100.0 * worst[6]
     );
     println!(
         "{} scenes on {workers} workers in {:.1} s",
