@@ -28,10 +28,12 @@ a = sqrt(4 P R / (pi E*)), 1/R = 1/R1 + 1/R2, 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2
 The slip-weakening transition length s0 (eq. s0 of the paper, at the centre) is given by --s0,
 or by --lambda (s0 = 2 Lambda a / pi); without either the law has none (Coulomb friction).
   h_contact : element size along both contact faces for |x| <= x_fine
-              (default min(a / --per-a, s0 / --per-s0), i.e. a/24 and h <= s0/2);
-  x_fine    : half-width of the fine zone (default 1.5 a);
-  depth     : D1 = min(R1, depth), D2 = min(R2, depth) (default 20 a: the finite bodies change
-              a by well under 1 %); the flat's half-width W = 2 * depth;
+              (default min(a / PER_A, 0.97 s0 / PER_S0) = min(a/24, 0.97 s0/2): s0 resolved,
+              h <= s0/2, with 3 % to spare for gmsh's chord lengths);
+  x_fine    : half-width of the fine zone (default FINE_FACTOR a = 1.5 a);
+  depth     : D1 = min(R1, depth), D2 = min(R2, depth) (default DEPTH_FACTOR a = 20 a: a and
+              p0 within 0.1 % of Hertz for identical bodies; 10 a: 0.3 %, 5 a: 2 %); the flat's
+              half-width W = 2 * depth;
   growth    : size h = min(h_far, h_contact + growth * d), d = distance to the fine zone of the
               two faces (default growth 0.15);
   h_far     : cap far from the contact (default depth / 6).
@@ -60,7 +62,7 @@ def positive(name, v):
 
 
 def parse(argv):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+    p = argparse.ArgumentParser(description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--r1", type=float, required=True, help="radius of the upper cylinder (body 1)")
     g = p.add_mutually_exclusive_group(required=True)
@@ -69,8 +71,9 @@ def parse(argv):
     p.add_argument("--out", required=True, help="output .msh")
     p.add_argument("--a", type=float, help="Hertz contact semi-width of the scene")
     p.add_argument("--load", type=float, help="normal load P per unit thickness (computes a)")
-    for k in ("e1", "nu1", "e2", "nu2"):
-        p.add_argument(f"--{k}", type=float, help=f"{k} (with --load)")
+    for k, what in (("e1", "Young's modulus of body 1 (upper)"), ("nu1", "Poisson's ratio of body 1"),
+                    ("e2", "Young's modulus of body 2 (lower)"), ("nu2", "Poisson's ratio of body 2")):
+        p.add_argument(f"--{k}", type=float, help=f"{what} (with --load)")
     p.add_argument("--s0", type=float, help="slip-weakening transition length s0")
     p.add_argument("--lambda", dest="lam", type=float, help="Lambda of the law (s0 = 2 Lambda a/pi)")
     p.add_argument("--h-contact", type=float, help="element size along the fine zone")

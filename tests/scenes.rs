@@ -729,3 +729,106 @@ fn random_scenes_match_the_closed_forms() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     let _ = std::fs::remove_dir_all(&root);
 }
+
+/// `meshes/scene.py` itself: the same options give the same bytes; the groups and tags are
+/// those of `vm272.geo`; the mesh reads without reoriented triangles and with sound angles; the
+/// contact faces carry h = min(a/24, 0.97 s0/2) (so h ≤ s0/2) along |x| ≤ 1.5a.
+#[test]
+fn scene_generator_is_deterministic_and_sized() {
+    let dir = tempdir("scene-gen");
+    let generate = |name: &str, extra: &[&str]| -> (Value, Vec<u8>) {
+        let out = dir.join(name);
+        let mut args = vec![
+            repo().join("meshes/scene.py").to_str().unwrap().to_string(),
+            "--out".into(),
+            out.to_str().unwrap().into(),
+            "--json".into(),
+        ];
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let (code, stdout, err) = run_with_timeout(
+            Command::new("python3").args(&args),
+            Duration::from_secs(120),
+        );
+        assert_eq!(
+            code, 0,
+            "scene.py {extra:?} failed (gmsh is required: pip install gmsh==4.15.2): {err}"
+        );
+        (
+            serde_json::from_str(stdout.trim()).unwrap(),
+            std::fs::read(&out).unwrap(),
+        )
+    };
+    let two = ["--r1", "10", "--r2", "15", "--a", "0.2", "--lambda", "0.04"];
+    let (j1, b1) = generate("a.msh", &two);
+    let (_, b2) = generate("b.msh", &two);
+    assert!(b1 == b2, "scene.py is not deterministic");
+    let s0 = 2.0 * 0.04 * 0.2 / std::f64::consts::PI;
+    let h = j1["h_contact"].as_f64().unwrap();
+    assert!(
+        (h - 0.97 * s0 / 2.0).abs() < 1e-12 * s0,
+        "h = {h}, s0 = {s0}"
+    );
+    let chord = j1["fine_chord"][1].as_f64().unwrap();
+    assert!(
+        chord <= 0.5 * s0 && chord > 0.95 * h,
+        "chord {chord}, h {h}"
+    );
+    assert!((j1["x_fine"].as_f64().unwrap() - 0.3).abs() < 1e-12);
+    let (jf, _) = generate(
+        "flat.msh",
+        &[
+            "--r1", "25", "--flat", "--load", "15", "--e1", "110000", "--nu1", "0.34", "--e2",
+            "207000", "--nu2", "0.3",
+        ],
+    );
+    // a of the copper pad on mild steel at 15 N/mm (docs/material_pairs.md: 0.07706 mm).
+    let a = Hertz::new(
+        Geometry::from_bodies(25.0, f64::INFINITY, 110e3, 0.34, 207e3, 0.3).unwrap(),
+        15.0,
+    )
+    .unwrap()
+    .a;
+    assert!((jf["a"].as_f64().unwrap() / a - 1.0).abs() < 1e-12);
+    assert!((jf["h_contact"].as_f64().unwrap() - a / 24.0).abs() < 1e-12 * a);
+    assert!((jf["depth"].as_f64().unwrap() - 20.0 * a).abs() < 1e-12 * a);
+    for file in ["a.msh", "flat.msh"] {
+        let (code, out, err) = common::stickslip(&["mesh-info", dir.join(file).to_str().unwrap()]);
+        assert_eq!(code, 0, "{err}");
+        let info: Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(info["reoriented_triangles"], 0, "{file}");
+        let mut groups: Vec<(String, u64, u64)> = info["groups"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|g| {
+                (
+                    g["name"].as_str().unwrap().to_string(),
+                    g["dim"].as_u64().unwrap(),
+                    g["tag"].as_u64().unwrap(),
+                )
+            })
+            .collect();
+        groups.sort_by_key(|g| g.2);
+        let want = [
+            ("lower_body", 2, 1),
+            ("upper_body", 2, 2),
+            ("bottom", 1, 3),
+            ("top", 1, 4),
+            ("lower_arc", 1, 5),
+            ("upper_arc", 1, 6),
+        ];
+        assert_eq!(
+            groups,
+            want.map(|(n, d, t)| (n.to_string(), d, t)).to_vec(),
+            "{file}"
+        );
+        for g in info["groups"].as_array().unwrap() {
+            if g["dim"] == 2 {
+                let angle = g["min_angle_deg"].as_f64().unwrap();
+                // A shallow segment's tips have the corner angle acos(1 − D/R): 20° for the pad.
+                assert!(angle > 15.0, "{file}: {} min angle {angle}", g["name"]);
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
