@@ -777,7 +777,7 @@ fn ladder_converges() {
                 rate_tol: 0.2,
                 offset: Some((-0.00834, 0.002)),
                 limit: None,
-                note: "L0: no equilibrium at Q = 0.8 f_d P under force control",
+                note: "L0: the Fig. 2 run stops at Q = 0.54 f_d P (see the text)",
             },
         ),
         study(
