@@ -12,7 +12,7 @@
 //!
 //! Each edge (a, c, b) is located below the node spacing from the nodal results (the figures
 //! of `history.csv` are also recorded: the stick and slip-weakening widths there are placed
-//! midway between two nodes, so they move in steps of a node spacing and do not converge
+//! midway between two nodes, so they move in steps of a node spacing and need not converge
 //! monotonically). How each quantity is measured is stated at its function below and in the
 //! doc.
 //!
