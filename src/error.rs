@@ -21,15 +21,13 @@ pub enum RunError {
         "the contact reached the edge of the candidate zone (candidate gap {gap:e}) at step {step}"
     )]
     ZoneClipped { gap: f64, step: usize },
-    #[error(
-        "equilibrium lost (gross sliding): the tangential load cannot exceed Q_max = {q_max:.6} \
-         (bracketed to [{q_max:.6}, {q_fail:.6}] by {cutbacks} bisections); the output holds the \
-         state just before it"
-    )]
+    #[error("{}", lost_message(*q_max, *q_fail, *cutbacks, *local_peak))]
     EquilibriumLost {
         q_max: f64,
         q_fail: f64,
         cutbacks: usize,
+        /// f_d P when Q_max is below it (a local peak, not the loss of equilibrium).
+        local_peak: Option<f64>,
     },
 }
 
@@ -53,5 +51,26 @@ impl RunError {
             RunError::Write { .. } => 4,
             RunError::EquilibriumLost { .. } => 5,
         }
+    }
+}
+
+/// The message of [`RunError::EquilibriumLost`]: gross sliding, or a local peak of the load path
+/// when Q_max is below f_d P (the least the contact carries once every point has weakened).
+fn lost_message(q_max: f64, q_fail: f64, cutbacks: usize, local_peak: Option<f64>) -> String {
+    let bracket = format!(
+        "Q_max = {q_max:.6} (bracketed to [{q_max:.6}, {q_fail:.6}] by {cutbacks} bisections); the \
+         output holds the state just before it"
+    );
+    match local_peak {
+        None => {
+            format!("equilibrium lost (gross sliding): the tangential load cannot exceed {bracket}")
+        }
+        Some(fdp) => format!(
+            "equilibrium lost at a local peak, not gross sliding: force control cannot pass \
+             {bracket}. Q_max is below f_d P = {fdp:.6}, which the contact carries even when \
+             every point has weakened: part of the contact lets go in a jump that quasi-static \
+             force control cannot follow (typically a mesh that does not resolve s0); slip \
+             control traces the path past it"
+        ),
     }
 }

@@ -799,10 +799,16 @@ pub fn run_model(
         eprint!("{}", end_summary(case_path, &summary, out_dir, &stem));
     }
     if let Some((q_max, q_fail)) = lost_equilibrium {
+        let local_peak = summary
+            .friction
+            .as_ref()
+            .and_then(|f| f.f_d.map(|fd| fd * f.load))
+            .filter(|fdp| q_max < (1.0 - 1e-6) * fdp);
         return Err(RunError::EquilibriumLost {
             q_max,
             q_fail,
             cutbacks: MAX_CUTBACKS,
+            local_peak,
         });
     }
     if let Some(m) = failure {

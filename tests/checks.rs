@@ -174,3 +174,22 @@ fn a_hold_stage_keeps_the_state() {
     let k = last.col("slip_increment");
     assert!(last.rows.iter().all(|row| row[k] == 0.0));
 }
+
+/// Fig. 2 on L0 (s0 not resolved): force control stops at a local peak of the load path,
+/// Q = 0.5438 N/mm, far below f_d P = 1 N/mm (slip control passes it and peaks at 1.11 f_d P,
+/// see docs/convergence.md). The message must not call that gross sliding.
+#[test]
+fn a_local_peak_below_fd_p_is_not_called_gross_sliding() {
+    let dir = tempdir("checks-local-peak");
+    let mut case = shipped_case_on("fig2.json", "vm272_L0.msh");
+    case["output"] = json!({"vtu": false});
+    let r = run_case_in(&dir, "case.json", &case.to_string(), &["--log", "error"]);
+    assert_eq!(r.code, 5, "{}", r.stderr);
+    assert!(
+        r.stderr.contains("local peak, not gross sliding") && r.stderr.contains("f_d P = 1.000000"),
+        "{}",
+        r.stderr
+    );
+    let q = summary(&r.out)["friction"]["q_max"].as_f64().unwrap();
+    assert!((q - 0.543814).abs() < 1e-5, "Q_max {q}");
+}
