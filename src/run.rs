@@ -734,6 +734,7 @@ pub fn run_model(
     if failure.is_none() {
         failure = failed_check(&checks);
     }
+    let fd_p = friction.as_ref().and_then(|f| f.f_d.map(|fd| fd * f.load));
     let summary = Summary {
         case: case_path.display().to_string(),
         title: case.title.clone(),
@@ -759,7 +760,13 @@ pub fn run_model(
         status: match (&failure, lost_equilibrium) {
             (None, _) => "completed".into(),
             (Some(_), Some((q, qf))) => {
-                format!("equilibrium lost: Q_max = {q:.6} (no equilibrium at {qf:.6})")
+                // Below f_d P the contact can carry the load: a local peak, not gross sliding.
+                match fd_p.filter(|fdp| q < (1.0 - 1e-6) * fdp) {
+                    None => format!("equilibrium lost: Q_max = {q:.6} (no equilibrium at {qf:.6})"),
+                    Some(fdp) => format!(
+                        "equilibrium lost at a local peak (not gross sliding: Q_max < f_d P = {fdp:.6}): Q_max = {q:.6} (no equilibrium at {qf:.6})"
+                    ),
+                }
             }
             (Some(m), None) => format!("failed at {m}; the output holds the steps before it"),
         },

@@ -190,6 +190,9 @@ fn a_local_peak_below_fd_p_is_not_called_gross_sliding() {
         "{}",
         r.stderr
     );
-    let q = summary(&r.out)["friction"]["q_max"].as_f64().unwrap();
+    let s = summary(&r.out);
+    let status = s["status"].as_str().unwrap();
+    assert!(status.contains("local peak"), "{status}");
+    let q = s["friction"]["q_max"].as_f64().unwrap();
     assert!((q - 0.543814).abs() < 1e-5, "Q_max {q}");
 }
