@@ -54,6 +54,17 @@ pub struct FrictionSummary {
     pub apparent_friction_dcm: Option<f64>,
 }
 
+impl FrictionSummary {
+    /// f_d P when `q_max` is below it: the least the contact carries once every point has
+    /// weakened, so a force-controlled run that stopped there met a local peak of the load
+    /// path, not gross sliding.
+    pub fn local_peak(&self, q_max: f64) -> Option<f64> {
+        self.f_d
+            .map(|fd| fd * self.load)
+            .filter(|fdp| q_max < (1.0 - 1e-6) * fdp)
+    }
+}
+
 /// What `summary.json` holds.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {

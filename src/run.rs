@@ -734,7 +734,8 @@ pub fn run_model(
     if failure.is_none() {
         failure = failed_check(&checks);
     }
-    let fd_p = friction.as_ref().and_then(|f| f.f_d.map(|fd| fd * f.load));
+    let local_peak =
+        lost_equilibrium.and_then(|(q, _)| friction.as_ref().and_then(|f| f.local_peak(q)));
     let summary = Summary {
         case: case_path.display().to_string(),
         title: case.title.clone(),
@@ -761,7 +762,7 @@ pub fn run_model(
             (None, _) => "completed".into(),
             (Some(_), Some((q, qf))) => {
                 // Below f_d P the contact can carry the load: a local peak, not gross sliding.
-                match fd_p.filter(|fdp| q < (1.0 - 1e-6) * fdp) {
+                match local_peak {
                     None => format!("equilibrium lost: Q_max = {q:.6} (no equilibrium at {qf:.6})"),
                     Some(fdp) => format!(
                         "equilibrium lost at a local peak (not gross sliding: Q_max < f_d P = {fdp:.6}): Q_max = {q:.6} (no equilibrium at {qf:.6})"
@@ -806,11 +807,7 @@ pub fn run_model(
         eprint!("{}", end_summary(case_path, &summary, out_dir, &stem));
     }
     if let Some((q_max, q_fail)) = lost_equilibrium {
-        let local_peak = summary
-            .friction
-            .as_ref()
-            .and_then(|f| f.f_d.map(|fd| fd * f.load))
-            .filter(|fdp| q_max < (1.0 - 1e-6) * fdp);
+        let local_peak = summary.friction.as_ref().and_then(|f| f.local_peak(q_max));
         return Err(RunError::EquilibriumLost {
             q_max,
             q_fail,

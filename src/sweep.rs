@@ -230,7 +230,14 @@ pub fn sweep(
                     let status = match (&sim.failure, sim.lost_equilibrium) {
                         (None, _) => "completed".to_string(),
                         (Some(_), Some((q, qf))) => {
-                            format!("equilibrium lost: Q_max = {q:.6} (none at {qf:.6})")
+                            match friction.as_ref().and_then(|f| f.local_peak(q)) {
+                                None => {
+                                    format!("equilibrium lost: Q_max = {q:.6} (none at {qf:.6})")
+                                }
+                                Some(fdp) => format!(
+                                    "equilibrium lost at a local peak (Q_max < f_d P = {fdp:.6}): Q_max = {q:.6} (none at {qf:.6})"
+                                ),
+                            }
                         }
                         (Some(m), None) => format!("failed: {m}"),
                     };
