@@ -568,6 +568,18 @@ impl Case {
                     ));
                 }
             }
+            // The friction law whole (preset, shape, f_s ≥ f_d, Λ data) before anything is
+            // read or allocated; Δ from Λ scales with the pair's E*, which does not change
+            // whether the law is valid, so any positive value serves here.
+            if let Some(f) = &c.friction
+                && let Err(why) = f.resolve(1.0)
+            {
+                return Err(bad(
+                    "contact.friction".into(),
+                    serde_json::to_string(f).unwrap_or_default(),
+                    why.trim_start_matches("friction: "),
+                ));
+            }
             if let Some(n) = c.max_iterations
                 && (n == 0 || n > 10_000)
             {

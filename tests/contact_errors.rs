@@ -100,3 +100,33 @@ fn unresolved_transition_zone_is_warned_about() {
         "{err}"
     );
 }
+
+/// A bad friction law is refused with the case, before the mesh is read or anything assembled:
+/// here the mesh does not even exist, and the message is about the law.
+#[test]
+fn bad_friction_law_is_refused_before_the_mesh_is_read() {
+    for (name, law, needle) in [
+        ("preset-early", json!({"preset": "gold-gold"}), "gold-gold"),
+        (
+            "shape-early",
+            json!({"shape": "linear", "fs": 0.15, "fd": 0.1, "lambda": 0.05, "radius": 4.0, "load": 10.0}),
+            "linear",
+        ),
+        (
+            "lambda-early",
+            json!({"shape": "ramp", "fs": 0.15, "fd": 0.1, "lambda": -0.05, "radius": 4.0, "load": 10.0}),
+            "`lambda`",
+        ),
+    ] {
+        let (code, err, wrote) = run_edited(name, &|v| {
+            v["mesh"] = json!("/nonexistent/mesh.msh");
+            v["contact"]["friction"] = law.clone();
+        });
+        assert_eq!(code, 2, "{name}: {err}");
+        assert!(
+            err.contains("contact.friction") && err.contains(needle) && !err.contains("mesh.msh"),
+            "{name}: {err}"
+        );
+        assert!(!wrote, "{name}: output written");
+    }
+}
