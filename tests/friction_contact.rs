@@ -240,12 +240,29 @@ fn figure_2_is_converged_in_the_step_count() {
 /// rows, 1e-5 on the pilot rows, whose two cancelling terms cost digits to round-off).
 #[test]
 fn newton_jacobian_matches_finite_differences() {
-    use stickslip::case::Control;
-    use stickslip::contact::solver::{Iterate, Method, State, Status};
-    use stickslip::friction::FrictionLaw;
-    use stickslip::model::StepLoad;
+    use stickslip::contact::solver::Method;
     // The model does not depend on the law (each solve takes it): built once.
     let (model, opt) = fig2_on_l1();
+    // Force control, and slip control (the pilot's x equation replaced by the mean-slip row).
+    // (`newton_residual` is the Newton method's residual: the penalty and augmented-Lagrangian
+    // rows have no residual function of their own yet to difference.)
+    for slip_drive in [false, true] {
+        jacobian_against_finite_differences(&model, &opt, Method::Newton, slip_drive);
+    }
+}
+
+/// The Jacobian of one Newton iteration of `method` against central finite differences of its
+/// residual, at an iterate moved off a solution with transition nodes (μ′ ≠ 0).
+fn jacobian_against_finite_differences(
+    model: &stickslip::model::Model,
+    opt: &stickslip::contact::solver::Options,
+    method: stickslip::contact::solver::Method,
+    slip_drive: bool,
+) {
+    use stickslip::case::Control;
+    use stickslip::contact::solver::{Iterate, PilotDrive, State, Status};
+    use stickslip::friction::FrictionLaw;
+    use stickslip::model::StepLoad;
     let cm = model.contact.as_ref().unwrap();
     for law in [
         FrictionLaw::ramp(0.15, 0.1, 2e-3).unwrap(),
@@ -279,13 +296,18 @@ fn newton_jacobian_matches_finite_differences() {
         // Move off the solution a little so that the residual is not zero.
         let (mu, sign) = off_solution(&next);
         let w0 = vec![0.0; mu.len()];
-        let eps = vec![0.0; ns];
-        let zeros = vec![0.0; ns];
+        // Penalty stiffnesses (unused by Newton) and the augmented Lagrangian's multiplier
+        // estimates: the committed forces.
+        let eps: Vec<f64> = cm.system.eps_unit.iter().map(|e| e * opt.kappa).collect();
         let it = Iterate {
             w0: &w0,
             drive: [
-                stickslip::contact::solver::PilotDrive::Force(0.7),
-                stickslip::contact::solver::PilotDrive::Force(-10.0),
+                if slip_drive {
+                    PilotDrive::Slip(next.mean_slip)
+                } else {
+                    PilotDrive::Force(0.7)
+                },
+                PilotDrive::Force(-10.0),
             ],
             law: Some(&law),
             substitute: true,
@@ -293,10 +315,10 @@ fn newton_jacobian_matches_finite_differences() {
             mu: &mu,
             status: &next.status,
             sign: &sign,
-            method: Method::Newton,
+            method,
             eps: &eps,
-            fbar_n: &zeros,
-            fbar_t: &zeros,
+            fbar_n: &st.f_n,
+            fbar_t: &st.f_t,
         };
         let sys = cm.system.newton_system(&it);
         let transition = (0..ns)
@@ -331,11 +353,12 @@ fn newton_jacobian_matches_finite_differences() {
             }
         }
         println!(
-            "{law:?}: {} unknowns, {transition} slip nodes with μ' ≠ 0; max |J_FD − J|/max|J| = {worst:.2e} at {worst_at:?}; residual {:.2e}",
+            "{method:?}{}, {law:?}: {} unknowns, {transition} slip nodes with μ' ≠ 0; max |J_FD − J|/max|J| = {worst:.2e} at {worst_at:?}; residual {:.2e}",
+            if slip_drive { " (slip control)" } else { "" },
             x0.len(),
             r0.iter().fold(0.0f64, |m, v| m.max(v.abs()))
         );
-        assert!(worst < 1e-7, "{worst} at {worst_at:?}");
+        assert!(worst < 1e-7, "{method:?}: {worst} at {worst_at:?}");
     }
 }
 
