@@ -278,7 +278,7 @@ fn jacobian_against_finite_differences(
                     },
                     prev,
                     None,
-                    &opt,
+                    opt,
                     Some(&law),
                     None,
                 )
