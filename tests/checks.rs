@@ -35,7 +35,8 @@ fn shipped_scene_passes_every_check_with_equilibrium_to_round_off() {
         assert_eq!(c["level"], "ok", "{c}");
     }
     let eq = check(&s, "equilibrium")["value"].as_f64().unwrap();
-    assert!(eq < 1e-11, "equilibrium residual {eq}");
+    // Measured 9.2e-14.
+    assert!(eq < 3e-13, "equilibrium residual {eq}");
     // Hertz a of the fitted radius: 1.85 % off on L1 (a coarse mesh: 0.6 % on L3).
     let dev = check(&s, "hertz_a")["value"].as_f64().unwrap();
     assert!(dev < 0.02, "{dev}");
@@ -112,7 +113,9 @@ fn pressed_then_pulled_apart_loses_equilibrium_at_coulomb_limit() {
     // Bisection to 2^-12 of a step of 0.1 of the stage: 2.3e-5 in Q.
     assert!((q / exact - 1.0).abs() < 1e-4, "{q} vs {exact}");
     let eq = check(&s, "equilibrium")["value"].as_f64().unwrap();
-    assert!(eq < 1e-11, "{eq}");
+    println!("equilibrium {eq:.2e}");
+    // Measured 9.6e-14.
+    assert!(eq < 3e-13, "{eq}");
 }
 
 /// Nearly incompressible bodies (ν = 0.4999 on both, VM272 L3): the mixed P2/P0 element keeps
