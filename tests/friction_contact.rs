@@ -234,20 +234,25 @@ fn figure_2_is_converged_in_the_step_count() {
     assert!(d < 0.005, "{d}");
 }
 
-/// Finite-difference check of the Newton Jacobian with slip-dependent μ: at an iterate inside
-/// a step with nodes in the transition zone, the assembled matrix equals the finite difference
-/// of the residual of the same equations (relative to its largest entry: 1e-7 on the contact
-/// rows, 1e-5 on the pilot rows, whose two cancelling terms cost digits to round-off).
+/// Finite-difference check of the Jacobian with slip-dependent μ: at an iterate inside a step
+/// with nodes in the transition zone, the assembled matrix of each method (Newton, penalty,
+/// augmented Lagrangian) under force and slip control equals the finite difference of the
+/// residual of the same equations (relative to its largest entry: 1e-7 on the contact rows,
+/// 1e-5 on the pilot rows, whose two cancelling terms cost digits to round-off).
 #[test]
 fn newton_jacobian_matches_finite_differences() {
     use stickslip::contact::solver::Method;
     // The model does not depend on the law (each solve takes it): built once.
     let (model, opt) = fig2_on_l1();
     // Force control, and slip control (the pilot's x equation replaced by the mean-slip row).
-    // (`newton_residual` is the Newton method's residual: the penalty and augmented-Lagrangian
-    // rows have no residual function of their own yet to difference.)
-    for slip_drive in [false, true] {
-        jacobian_against_finite_differences(&model, &opt, Method::Newton, slip_drive);
+    for method in [
+        Method::Newton,
+        Method::Penalty,
+        Method::AugmentedLagrangian,
+    ] {
+        for slip_drive in [false, true] {
+            jacobian_against_finite_differences(&model, &opt, method, slip_drive);
+        }
     }
 }
 

@@ -1,0 +1,382 @@
+//! The linear algebra of the contact iteration: the Cholesky factor of a Delassus block with
+//! Sherman–Morrison–Woodbury updates for the rows that differ from it, and the LU of a dense
+//! Newton matrix reused as a GMRES preconditioner.
+
+use super::{NewtonRows, SpecialRow};
+use faer::Mat;
+use faer::linalg::solvers::Solve;
+
+/// Solves `A x = b` by a fresh LU; `None` when `A` is numerically singular.
+pub(super) fn solve_dense(a: &Mat<f64>, b: &Mat<f64>) -> Option<Mat<f64>> {
+    let lu = a.partial_piv_lu();
+    let x = lu.solve(b);
+    (!singular_pivots(&lu)).then_some(x)
+}
+
+/// Whether an LU factorisation is numerically singular: its smallest pivot against the largest.
+/// A singular system (a body free to slide once every node slips, or a direction nothing holds)
+/// still gives a finite answer from a backward-stable LU.
+fn singular_pivots(lu: &faer::linalg::solvers::PartialPivLu<f64>) -> bool {
+    let u = lu.U();
+    let n = u.nrows();
+    if n == 0 {
+        return false;
+    }
+    let d: Vec<f64> = (0..n).map(|i| u[(i, i)].abs()).collect();
+    let lo = d.iter().cloned().fold(f64::INFINITY, f64::min);
+    let hi = d.iter().cloned().fold(0.0, f64::max);
+    lo <= 1e-12 * hi
+}
+
+/// Factorisations kept across Newton iterations and load steps (see
+/// [`super::ContactSystem::solve_step`]).
+///
+/// The structured path ([`Self::solve_rows`]) keeps the Cholesky factor of a Delassus block
+/// `K = W[k_unk, k_unk]` and solves each Newton system `A x = b` whose matrix differs from `K`
+/// only in a few rows by the Sherman–Morrison–Woodbury identity; the dense path
+/// (`LuCache::solve`) keeps the LU of an earlier Newton matrix as a GMRES preconditioner.
+#[derive(Default)]
+pub struct LuCache {
+    /// Dense path: unknowns and LU of the last factorised Newton matrix.
+    unk: Vec<usize>,
+    lu: Option<faer::linalg::solvers::PartialPivLu<f64>>,
+    /// Structured path: unknowns (μ indices) of the factorised block `K`, the position in it
+    /// of each μ index (`usize::MAX`: not in it), its Cholesky factor (`K = Zᵀ Z` restricted to
+    /// the unknowns is symmetric positive definite), and the columns `K⁻¹ e_q` computed so far
+    /// by position `q` (empty: not yet).
+    k_unk: Vec<usize>,
+    k_pos: Vec<usize>,
+    k_llt: Option<faer::linalg::solvers::Llt<f64>>,
+    k_cols: Vec<Vec<f64>>,
+    /// Factorisations done (of `K` or of a dense Newton matrix) and GMRES iterations spent (for
+    /// the run summary).
+    pub factorisations: usize,
+    pub gmres_iterations: usize,
+}
+
+/// Contact systems with fewer candidate unknowns than this are solved through the dense Newton
+/// matrix even with a cache. There it costs microseconds, and such small systems are where the
+/// degenerate cases live (a few nodes touching at zero load, whose active sets are decided by
+/// the round-off in forces that are zero in exact arithmetic): the dense path keeps the
+/// rounding of the reference solve for them.
+pub(super) const STRUCTURED_MIN: usize = 64;
+
+/// GMRES iterations before giving up on the cached factorisation and refactorising.
+const GMRES_MAX: usize = 12;
+
+impl LuCache {
+    /// Forgets the factorisations.
+    pub fn clear(&mut self) {
+        self.lu = None;
+        self.unk.clear();
+        self.k_llt = None;
+        self.k_unk.clear();
+        self.k_pos.clear();
+        self.k_cols.clear();
+    }
+
+    /// Solves the structured Newton system `rows` (see [`super::ContactSystem::newton_rows`]) with the
+    /// cached Cholesky factor of a Delassus block `K` whose unknowns include those of `rows`;
+    /// `w` is the whole Delassus operator. Returns the unknowns (ordered as `rows.unk`) and
+    /// `W μ` at the new iterate (all rows of `W`; on the system's own rows it is taken from the
+    /// equations, which saves most of a product with `W` per iteration). `None` if `K` or the
+    /// system is numerically singular, or the answer is not finite (the caller then assembles
+    /// the dense system, whose LU decides).
+    ///
+    /// Why: through a load history the contact set changes little, and the Newton matrix
+    /// differs from `K = W[unk, unk]` only in the rows of slip nodes and force-driven anchors
+    /// (`p` of them, `p ≪ n`). Unknowns of `K` that left the contact are more such rows
+    /// (`x_q = 0`), so `K` is refactorised only when a node outside it comes into contact or
+    /// too many of its unknowns have left. With `A = K + E_P B` (`E_P` the special rows'
+    /// unit vectors, `B = A_P − K_P`):
+    /// ```text
+    ///   x0 = K⁻¹ b,   G = K⁻¹ E_P,   C = I + B G = A_P G,   C y = B x0,   x = x0 − G y,
+    /// ```
+    /// where `A_P G` has the entries `α G_rj + γ G_qj + β δ_rj` (because `K G = E_P`) and
+    /// `B x0 = α x0_r + γ x0_q + (β − 1) b_r` (because `K x0 = b`). Each iteration costs one
+    /// solve with the cached factor and a `p × p` factorisation; the columns of `G` are kept
+    /// until `K` is refactorised, so a node that starts to slip costs one more solve, once.
+    ///
+    /// `new_step`: the first iteration of a load step. While the contact set settles within a
+    /// step, `K` is kept until a quarter of its unknowns have left; at the start of a step it
+    /// is refactorised for the current set once more than 1/64 have, since those rows would
+    /// otherwise enlarge the capacitance system of every iteration of the steps to come.
+    pub fn solve_rows(
+        &mut self,
+        w: &Mat<f64>,
+        rows: &NewtonRows,
+        new_step: bool,
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        let covered = self.k_llt.is_some()
+            && rows
+                .unk
+                .iter()
+                .all(|&u| self.k_pos.get(u).is_some_and(|&q| q != usize::MAX));
+        // Unknowns of K not in this system: each costs a special row (and a column of G).
+        let left = self.k_unk.len().saturating_sub(rows.unk.len());
+        let limit = self.k_unk.len() / if new_step { 64 } else { 4 };
+        if !covered || left > limit {
+            self.factorise_block(w, &rows.unk)?;
+        }
+        let nk = self.k_unk.len();
+        let mut b = vec![0.0; nk];
+        let mut in_system = vec![false; nk];
+        for (r, &u) in rows.unk.iter().enumerate() {
+            b[self.k_pos[u]] = rows.b[r];
+            in_system[self.k_pos[u]] = true;
+        }
+        let mut special: Vec<SpecialRow> = rows
+            .special
+            .iter()
+            .map(|s| SpecialRow {
+                row: self.k_pos[rows.unk[s.row]],
+                col: self.k_pos[rows.unk[s.col]],
+                combo: s
+                    .combo
+                    .iter()
+                    .map(|&(t, c)| (self.k_pos[rows.unk[t]], c))
+                    .collect(),
+                ..*s
+            })
+            .collect();
+        special.extend((0..nk).filter(|&q| !in_system[q]).map(|q| SpecialRow {
+            row: q,
+            alpha: 1.0,
+            beta: 0.0,
+            gamma: 0.0,
+            col: q,
+            combo: Vec::new(),
+        }));
+        let llt = self.k_llt.as_ref()?;
+        // Columns of G not computed yet, in one solve with several right-hand sides.
+        let missing: Vec<usize> = special
+            .iter()
+            .map(|s| s.row)
+            .filter(|&q| self.k_cols[q].is_empty())
+            .collect();
+        if !missing.is_empty() {
+            let mut e = Mat::<f64>::zeros(nk, missing.len());
+            for (c, &q) in missing.iter().enumerate() {
+                e[(q, c)] = 1.0;
+            }
+            llt.solve_in_place(&mut e);
+            for (c, &q) in missing.iter().enumerate() {
+                self.k_cols[q] = e.col(c).iter().copied().collect();
+            }
+        }
+        let mut x0 = Mat::from_fn(nk, 1, |i, _| b[i]);
+        llt.solve_in_place(&mut x0);
+        let mut x: Vec<f64> = x0.col(0).iter().copied().collect();
+        let p = special.len();
+        let mut y_cap = Vec::new();
+        if p > 0 {
+            let mut cap = Mat::<f64>::zeros(p, p);
+            // Index in `special` of each row of K that is special.
+            let mut special_at = vec![None; nk];
+            for (i, si) in special.iter().enumerate() {
+                special_at[si.row] = Some(i);
+            }
+            let mut rhs = Mat::<f64>::zeros(p, 1);
+            // Size of the terms of each row: C is singular when A is, often by cancellation
+            // between large terms (a direction nothing holds), which its own pivots relative
+            // to each other do not show; relative to the terms they do.
+            let mut size = vec![0.0f64; p];
+            for (j, sj) in special.iter().enumerate() {
+                let g = &self.k_cols[sj.row];
+                for (i, si) in special.iter().enumerate() {
+                    let (t1, t2) = (si.alpha * g[si.row], si.gamma * g[si.col]);
+                    cap[(i, j)] = t1 + t2;
+                    size[i] = size[i].max(t1.abs() + t2.abs());
+                }
+                if sj.combo.is_empty() {
+                    cap[(j, j)] += sj.beta;
+                    rhs[(j, 0)] =
+                        sj.alpha * x[sj.row] + sj.gamma * x[sj.col] + (sj.beta - 1.0) * b[sj.row];
+                } else {
+                    // Σ c K_t G = Σ c (E_P)_t: unit entries where t is a special row.
+                    for &(t, c) in &sj.combo {
+                        if let Some(i) = special_at[t] {
+                            cap[(j, i)] += c;
+                        }
+                    }
+                    rhs[(j, 0)] = sj.alpha * x[sj.row]
+                        + sj.gamma * x[sj.col]
+                        + sj.combo.iter().map(|&(t, c)| c * b[t]).sum::<f64>()
+                        - b[sj.row];
+                }
+            }
+            for (i, si) in special.iter().enumerate() {
+                let k_part = if si.combo.is_empty() {
+                    si.beta.abs()
+                } else {
+                    si.combo.iter().map(|(_, c)| c.abs()).sum()
+                };
+                let scale = 1.0 / (size[i] + k_part).max(f64::MIN_POSITIVE);
+                for j in 0..p {
+                    cap[(i, j)] *= scale;
+                }
+                rhs[(i, 0)] *= scale;
+            }
+            let clu = cap.partial_piv_lu();
+            // Near-singular (gross sliding, a free direction): the dense system decides.
+            if (0..p).any(|i| clu.U()[(i, i)].abs() <= 1e-10) {
+                return None;
+            }
+            let y = clu.solve(&rhs);
+            y_cap = (0..p).map(|j| y[(j, 0)]).collect();
+            for (sj, yj) in special.iter().zip(&y_cap) {
+                for (xi, gi) in x.iter_mut().zip(&self.k_cols[sj.row]) {
+                    *xi -= gi * yj;
+                }
+            }
+        }
+        // W μ of the new iterate, for the next iteration's sets: on this system's rows it is
+        // what the rows impose, `K x = b − E_P y`, the others are products with W.
+        let mut w_mu = vec![0.0; w.nrows()];
+        let xs: Vec<f64> = rows.unk.iter().map(|&u| x[self.k_pos[u]]).collect();
+        let mut in_unk = vec![false; w.nrows()];
+        for &u in &rows.unk {
+            in_unk[u] = true;
+            w_mu[u] = b[self.k_pos[u]];
+        }
+        for (sj, yj) in special.iter().zip(&y_cap) {
+            let u = self.k_unk[sj.row];
+            if in_unk[u] {
+                w_mu[u] -= yj;
+            }
+        }
+        for (i, wi) in w_mu.iter_mut().enumerate() {
+            if !in_unk[i] {
+                let col = w.col(i);
+                *wi = rows.unk.iter().zip(&xs).map(|(&u, xu)| col[u] * xu).sum();
+            }
+        }
+        xs.iter().all(|v| v.is_finite()).then_some((xs, w_mu))
+    }
+
+    /// Factorises `K = W[unk, unk]` for [`Self::solve_rows`]; `None` if it is singular or not
+    /// numerically positive definite.
+    fn factorise_block(&mut self, w: &Mat<f64>, unk: &[usize]) -> Option<()> {
+        let k = Mat::from_fn(unk.len(), unk.len(), |i, j| w[(unk[i], unk[j])]);
+        let llt = k.llt(faer::Side::Lower).ok();
+        self.factorisations += 1;
+        self.k_llt = None;
+        self.k_unk.clear();
+        self.k_pos.clear();
+        self.k_cols.clear();
+        let llt = llt?;
+        // The pivots are L_ii²: as for an LU, singular when the smallest is below 1e-12 of the
+        // largest; and pivots within 2^52 of the smallest normal number have lost digits to
+        // underflow (absurd moduli make W that small).
+        let pivots: Vec<f64> = (0..unk.len()).map(|i| llt.L()[(i, i)].powi(2)).collect();
+        let lo = pivots.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = pivots.iter().copied().fold(0.0, f64::max);
+        if lo <= 1e-12 * hi || lo < f64::MIN_POSITIVE / f64::EPSILON {
+            return None;
+        }
+        self.k_pos = vec![usize::MAX; w.nrows()];
+        for (q, &u) in unk.iter().enumerate() {
+            self.k_pos[u] = q;
+        }
+        self.k_unk = unk.to_vec();
+        self.k_cols = vec![Vec::new(); unk.len()];
+        self.k_llt = Some(llt);
+        Some(())
+    }
+
+    /// Solves `A x = b` for the unknowns `unk`: by GMRES preconditioned with the cached LU when
+    /// it is for the same unknowns, else (or if GMRES stalls) with a new LU, which is kept.
+    /// `None` when the system is singular.
+    pub(super) fn solve(&mut self, unk: &[usize], a: &Mat<f64>, b: &Mat<f64>) -> Option<Mat<f64>> {
+        if self.unk == unk
+            && let Some(lu) = &self.lu
+            && let Some((x, its)) = gmres(a, b, lu, 1e-13, GMRES_MAX)
+        {
+            self.gmres_iterations += its;
+            return Some(x);
+        }
+        let lu = a.partial_piv_lu();
+        self.factorisations += 1;
+        if singular_pivots(&lu) {
+            self.clear();
+            return None;
+        }
+        let x = lu.solve(b);
+        self.unk = unk.to_vec();
+        self.lu = Some(lu);
+        Some(x)
+    }
+}
+
+/// Right-preconditioned GMRES (no restart) for `A x = b` with preconditioner `M⁻¹` given by an
+/// LU of a nearby matrix, from `x0 = M⁻¹ b`. Returns the solution and the iterations, or
+/// `None` if the relative residual is not below `tol` within `max_it` iterations.
+fn gmres(
+    a: &Mat<f64>,
+    b: &Mat<f64>,
+    m: &faer::linalg::solvers::PartialPivLu<f64>,
+    tol: f64,
+    max_it: usize,
+) -> Option<(Mat<f64>, usize)> {
+    let n = a.nrows();
+    let bn = b.norm_l2();
+    if bn == 0.0 {
+        return Some((Mat::zeros(n, 1), 0));
+    }
+    let x0 = m.solve(b);
+    let r0 = b - a * &x0;
+    let beta = r0.norm_l2();
+    if beta <= tol * bn {
+        return Some((x0, 0));
+    }
+    // Arnoldi on A M⁻¹ with modified Gram–Schmidt; Givens rotations for the least squares.
+    let mut v: Vec<Mat<f64>> = vec![&r0 * faer::Scale(1.0 / beta)];
+    let mut h = vec![vec![0.0; max_it]; max_it + 1];
+    let (mut cs, mut sn) = (vec![0.0; max_it], vec![0.0; max_it]);
+    let mut g = vec![0.0; max_it + 1];
+    g[0] = beta;
+    for k in 0..max_it {
+        let z = m.solve(&v[k]);
+        let mut w = a * &z;
+        for i in 0..=k {
+            let hik = (v[i].transpose() * &w)[(0, 0)];
+            h[i][k] = hik;
+            w -= &v[i] * faer::Scale(hik);
+        }
+        let hn = w.norm_l2();
+        h[k + 1][k] = hn;
+        for i in 0..k {
+            let t = cs[i] * h[i][k] + sn[i] * h[i + 1][k];
+            h[i + 1][k] = -sn[i] * h[i][k] + cs[i] * h[i + 1][k];
+            h[i][k] = t;
+        }
+        let d = h[k][k].hypot(h[k + 1][k]);
+        if d == 0.0 {
+            return None;
+        }
+        cs[k] = h[k][k] / d;
+        sn[k] = h[k + 1][k] / d;
+        h[k][k] = d;
+        h[k + 1][k] = 0.0;
+        g[k + 1] = -sn[k] * g[k];
+        g[k] *= cs[k];
+        if g[k + 1].abs() <= tol * bn || hn == 0.0 {
+            // y = H⁻¹ g, x = x0 + M⁻¹ V y
+            let mut y = vec![0.0; k + 1];
+            for i in (0..=k).rev() {
+                let s: f64 = (i + 1..=k).map(|j| h[i][j] * y[j]).sum();
+                y[i] = (g[i] - s) / h[i][i];
+            }
+            let mut vy = Mat::<f64>::zeros(n, 1);
+            for (i, yi) in y.iter().enumerate() {
+                vy += &v[i] * faer::Scale(*yi);
+            }
+            let x = x0 + m.solve(&vy);
+            // Guard against loss of orthogonality: check the true residual.
+            let r = (b - a * &x).norm_l2();
+            return (r <= 10.0 * tol * bn).then_some((x, k + 1));
+        }
+        v.push(&w * faer::Scale(1.0 / hn));
+    }
+    None
+}

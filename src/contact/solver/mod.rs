@@ -1,0 +1,285 @@
+//! The contact problem on the contact unknowns alone.
+//!
+//! The elastic bodies are condensed onto the retained DOFs `R` (contact nodes and pilot):
+//! `Ŝ u_R = g + r_R` (see [`crate::condense`]). The contact and pilot forces enter as
+//! `r_R = Yᵀ μ` with `Y = [Ĝ; T̂; E_Pᵀ]` and unknowns `μ = (F_n, F_t, z)`: nodal normal forces,
+//! nodal tangential forces on the master side, and the pilot's force plus its grounding spring
+//! force `z = r_P + k_g u_P`. Then
+//! ```text
+//!   Y u_R = w0 + W μ,   W = Y Ŝ⁻¹ Yᵀ = Zᵀ Z,   Z = L_RR⁻¹ Yᵀ,   w0 = Zᵀ L_RR⁻¹ g,
+//! ```
+//! gives every nodal gap `ĝ = g0 + (Y u_R)_n`, relative tangential displacement
+//! `v̂ = (Y u_R)_t` and the pilot displacement from `μ` alone. `W` (the Delassus operator) is
+//! dense and small and is built once per model; each Newton iteration is a dense solve on the
+//! active unknowns.
+//!
+//! Complementarity at each slave node j (forces, gaps and slips are nodal quantities):
+//! * normal: `F_n ≥ 0, ĝ ≥ 0, F_n ĝ = 0`, written `F_n − max(0, F_n − c ĝ) = 0`;
+//! * friction (Coulomb with `μ_j = f(U_j)` of the accumulated slip `U_j`): stick
+//!   (`Δv̂ = 0`) while `|F_t − c Δv̂| < μ_j (F_n − c ĝ)`, else slip with
+//!   `F_t = μ_j F_n sign(F_t − c Δv̂)` (the force on the master opposes its slip).
+//!
+//! `c = E*` (the composite plane-strain modulus) makes the complementarity functions
+//! homogeneous in force per length, so iterates do not depend on the units. In 2-D the
+//! semi-smooth Newton method on these functions is the primal–dual active-set method: each
+//! iteration fixes the sets (inactive / stick / slip) from the current iterate and solves the
+//! linear equations they imply; it has converged when the sets no longer change and the
+//! update is small. The penalty and augmented-Lagrangian methods solve the same equations with
+//! `F_n = ε max(0, −ĝ)` (and an elastic tangential spring), the latter with an outer update of
+//! the multiplier estimate until the penetration is below tolerance.
+
+//!
+//! The rooms: this module holds the types and the operator; [`enforce`] the active sets and
+//! the linearised equations of each method (one source, assembled densely or handed to the
+//! structured solve); [`newton`] the iteration of a load step; [`linalg`] the factorisations
+//! kept across iterations (Cholesky/Woodbury, LU + GMRES).
+
+mod enforce;
+mod linalg;
+mod newton;
+
+pub use enforce::{Equation, NewtonRows, NewtonSystem, SlipLin, SpecialRow};
+pub use linalg::LuCache;
+
+use crate::friction::FrictionLaw;
+use faer::Mat;
+
+/// How the contact conditions are enforced.
+#[derive(
+    Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Semi-smooth Newton (primal–dual active set) on the complementarity functions: exact.
+    Newton,
+    /// Penalty: `F_n = ε max(0, −ĝ)`, tangential spring `ε`; `ε = κ E* w_j / h_j`.
+    Penalty,
+    /// Augmented Lagrangian: penalty with an outer multiplier update (Uzawa) until the largest
+    /// penetration is below `tolerance × h`.
+    AugmentedLagrangian,
+}
+
+/// Contact state of a slave node.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    Open,
+    Stick,
+    Slip,
+}
+
+impl Status {
+    pub fn code(self) -> f64 {
+        match self {
+            Status::Open => 0.0,
+            Status::Stick => 1.0,
+            Status::Slip => 2.0,
+        }
+    }
+}
+
+/// How a pilot component is driven in a solve.
+#[derive(Clone, Copy, Debug)]
+pub enum PilotDrive {
+    Force(f64),
+    Displacement(f64),
+    /// The x component only: the pilot force is whatever makes the mean slip
+    /// ([`State::mean_slip`]) reach this value. Slip grows monotonically towards gross
+    /// sliding, also on the softening branch past the peak tangential force, where both the
+    /// force and the pilot displacement turn back (indirect displacement control).
+    Slip(f64),
+}
+
+/// The converged contact state after a step (and the committed history).
+#[derive(Clone, Debug)]
+pub struct State {
+    pub f_n: Vec<f64>,
+    pub f_t: Vec<f64>,
+    /// Anchor unknowns: force on each grounded DOF plus its spring force (pilot first).
+    pub z: Vec<f64>,
+    /// Relative tangential displacement v̂ (master minus slave).
+    pub v: Vec<f64>,
+    /// Accumulated slip U.
+    pub slip: Vec<f64>,
+    /// Slip increment of the last step (signed).
+    pub dv: Vec<f64>,
+    pub gap: Vec<f64>,
+    pub status: Vec<Status>,
+    pub mu: Vec<f64>,
+    /// Pilot displacement and force.
+    pub pilot_u: [f64; 2],
+    pub pilot_f: [f64; 2],
+    /// Mean slip: the sum over steps of the weighted mean of the slip increments `Δv̂` of the
+    /// nodes in contact at the start of each step (weights: mortar weights), signed so that it
+    /// grows when the pilot is pushed in +x. The quantity driven by [`PilotDrive::Slip`].
+    pub mean_slip: f64,
+}
+
+/// One iteration's data for [`ContactSystem::newton_system`].
+#[derive(Clone, Copy)]
+pub struct Iterate<'a> {
+    /// Substitute the tangential force of slip nodes with μ′ = 0 (`F_t = ±μ F_n`).
+    pub substitute: bool,
+    pub w0: &'a [f64],
+    pub drive: [PilotDrive; 2],
+    pub law: Option<&'a FrictionLaw>,
+    pub prev: &'a State,
+    /// Current forces μ = (F_n, F_t, z).
+    pub mu: &'a [f64],
+    pub status: &'a [Status],
+    /// Slip direction per node (sign of the master's tangential force).
+    pub sign: &'a [f64],
+    pub method: Method,
+    pub eps: &'a [f64],
+    pub fbar_n: &'a [f64],
+    pub fbar_t: &'a [f64],
+}
+
+/// The condensed contact operator.
+pub struct ContactSystem {
+    pub ns: usize,
+    /// Whether the first two anchors are the pilot's (x, y) DOFs.
+    pub has_pilot: bool,
+    /// Delassus operator `W` (m × m), m = 2 ns (+ 2 with a pilot).
+    pub w: Mat<f64>,
+    /// `Z = L_RR⁻¹ Yᵀ` (n_R × m).
+    pub z: Mat<f64>,
+    /// Nodal initial gaps (including the effect of prescribed displacements).
+    pub gap0: Vec<f64>,
+    /// Constant tangential offsets from prescribed displacements.
+    pub v0: Vec<f64>,
+    /// Complementarity constant `c = E*`.
+    pub c: f64,
+    /// Per node penalty stiffness for κ = 1: `E* w_j / h_j`.
+    pub eps_unit: Vec<f64>,
+    /// Grounding springs of the anchors: the pilot's DOFs, then DOFs of bodies held by contact
+    /// alone (driven at zero force).
+    pub kg: Vec<f64>,
+    /// Mortar weight of each slave node (its share of the slave face length).
+    pub weight: Vec<f64>,
+    /// +1 or −1: the sign of the slips' response to a pilot force in +x, so that
+    /// [`State::mean_slip`] grows in the direction the pilot is pushed.
+    pub slip_orient: f64,
+    /// Whether the pilot drives a body that no support holds (only the contact can).
+    pub floating_pilot: bool,
+}
+
+/// Options of a contact solve.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    pub method: Method,
+    /// Penalty factor κ (penalty and augmented Lagrangian).
+    pub kappa: f64,
+    pub max_iterations: usize,
+    /// Relative tolerance on the update of the forces (Newton), and on the penetration
+    /// relative to the element size (augmented Lagrangian).
+    pub tolerance: f64,
+    /// Print every iteration (sets and update) to standard error.
+    pub verbose: bool,
+}
+
+/// Result of one step solve.
+#[derive(Clone, Debug)]
+pub struct StepOutcome {
+    pub state: State,
+    pub iterations: usize,
+    /// Largest |update| / max |force| at the last iteration.
+    pub last_update: f64,
+}
+
+/// Why a step did not converge.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum ContactError {
+    #[error(
+        "the contact Newton iteration did not converge in {iterations} iterations (last relative update {update:.2e}, {changes} nodes still changing state)"
+    )]
+    NoConvergence {
+        iterations: usize,
+        update: f64,
+        changes: usize,
+    },
+    #[error(
+        "the contact equations became singular: {unknowns} unknowns, {in_contact} in contact; a body may be free to move in a direction no contact or support holds"
+    )]
+    Singular { unknowns: usize, in_contact: usize },
+}
+
+impl ContactSystem {
+    /// `y = w0 + W μ`.
+    fn y(&self, w0: &[f64], mu: &[f64]) -> Vec<f64> {
+        let m = w0.len();
+        let mut y = w0.to_vec();
+        for (j, &mj) in mu.iter().enumerate() {
+            if mj != 0.0 {
+                let col = self.w.col(j);
+                for i in 0..m {
+                    y[i] += col[i] * mj;
+                }
+            }
+        }
+        y
+    }
+
+    fn m(&self) -> usize {
+        2 * self.ns + self.kg.len()
+    }
+
+    /// An initial state before any load: no contact force, zero slip.
+    pub fn initial_state(&self) -> State {
+        let ns = self.ns;
+        State {
+            f_n: vec![0.0; ns],
+            f_t: vec![0.0; ns],
+            z: vec![0.0; self.kg.len()],
+            v: self.v0.clone(),
+            slip: vec![0.0; ns],
+            dv: vec![0.0; ns],
+            gap: self.gap0.clone(),
+            status: vec![Status::Open; ns],
+            mu: vec![0.0; ns],
+            pilot_u: [0.0; 2],
+            pilot_f: [0.0; 2],
+            mean_slip: 0.0,
+        }
+    }
+
+    /// The weights `ω_j` of the mean slip for a step from `prev`: normalised mortar weights of
+    /// the nodes in contact, times [`Self::slip_orient`] (all zero with no node in contact).
+    pub fn slip_weights(&self, prev: &State) -> Vec<f64> {
+        let on = |j: usize| prev.status[j] != Status::Open;
+        let total: f64 = (0..self.ns)
+            .filter(|&j| on(j))
+            .map(|j| self.weight[j])
+            .sum();
+        (0..self.ns)
+            .map(|j| {
+                if on(j) && total > 0.0 {
+                    self.slip_orient * self.weight[j] / total
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+
+    /// How anchor `k` is driven: the pilot's components by `drive`, every other anchor (DOFs of
+    /// a body held by contact alone) at zero force.
+    fn anchor_drive(&self, drive: [PilotDrive; 2], k: usize) -> PilotDrive {
+        if self.has_pilot && k < 2 {
+            drive[k]
+        } else {
+            PilotDrive::Force(0.0)
+        }
+    }
+
+    fn eps_h(&self, j: usize) -> f64 {
+        // Penetration tolerance scale: w_j ≈ h_j / 3 … 2h_j / 3; eps_unit = E* w/h.
+        self.eps_unit[j] / self.c * 1.0
+    }
+
+    fn y_at(&self, w0: &[f64], mu: &[f64], i: usize) -> f64 {
+        let col = self.w.col(i);
+        w0[i] + (0..mu.len()).map(|j| col[j] * mu[j]).sum::<f64>()
+    }
+
+}

@@ -1,0 +1,396 @@
+//! The Newton iteration of one load step: sets from the iterate, the linear solve of the
+//! equations [`super::enforce`] writes, the augmented Lagrangian's outer update, and the
+//! safeguards against cycling and stalling.
+
+use super::enforce::Trial;
+use super::linalg::{STRUCTURED_MIN, solve_dense};
+use super::{
+    ContactError, ContactSystem, Iterate, LuCache, Method, NewtonSystem, Options, PilotDrive,
+    State, Status, StepOutcome,
+};
+use crate::friction::FrictionLaw;
+
+impl ContactSystem {
+    /// Solves one load step from the committed state `prev`, with the condensed load `w0`
+    /// (from the bodies' loads), the pilot drive, and friction law `law` (`None`: frictionless).
+    ///
+    /// `guess`: predicted forces for this step (e.g. extrapolated from the last two steps); the
+    /// first active sets are taken from it instead of from the committed state.
+    ///
+    /// `cache`: factorisations kept from earlier iterations and steps. With the Newton method (and
+    /// a force- or displacement-driven pilot) each Newton system is solved from a cached Cholesky
+    /// factor of the Delassus block `K = W[unk, unk]`, which depends on the contact set only, plus
+    /// a small capacitance system for the rows that differ from `K` (slip nodes, force-driven
+    /// anchors): see [`LuCache::solve_rows`]. Through a tangential ramp the contact set hardly
+    /// changes, so one factorisation serves many steps and no dense Newton matrix is assembled.
+    /// Otherwise (penalty, augmented Lagrangian, other drives) the dense system is solved by GMRES
+    /// preconditioned with the cached LU of an earlier dense system, refactorised when GMRES needs
+    /// more than a handful of iterations. Either way the tangential forces of slip nodes are kept
+    /// as unknowns (not substituted) so that the unknowns do not change with every stick/slip
+    /// change.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_step(
+        &self,
+        w0: &[f64],
+        drive: [PilotDrive; 2],
+        law: Option<&FrictionLaw>,
+        prev: &State,
+        guess: Option<&State>,
+        opt: &Options,
+        mut cache: Option<&mut LuCache>,
+    ) -> Result<StepOutcome, ContactError> {
+        let ns = self.ns;
+        let m = self.m();
+        assert_eq!(w0.len(), m);
+        let eps: Vec<f64> = self.eps_unit.iter().map(|e| e * opt.kappa).collect();
+        // Unknowns μ = (F_n, F_t, z); warm start from the committed state.
+        let start = guess.unwrap_or(prev);
+        let mut mu = vec![0.0; m];
+        mu[..ns].copy_from_slice(&start.f_n);
+        mu[ns..2 * ns].copy_from_slice(&start.f_t);
+        mu[2 * ns..].copy_from_slice(&start.z);
+        // Multiplier estimates of the augmented Lagrangian.
+        let mut fbar_n = prev.f_n.clone();
+        let mut fbar_t = prev.f_t.clone();
+        let mut status: Vec<Status> = prev.status.clone();
+        // With no node in contact yet, start from the closest nodes so that the first linear
+        // system holds the body that the pilot pushes (three nodes span both sides of the
+        // first touch, which also stops a frictionless rigid sliding mode).
+        if status.iter().all(|s| *s == Status::Open) {
+            seed_closest(&self.gap0, law.is_some(), &mut status);
+        }
+        // Slip directions of the warm start: the sign of the committed tangential force.
+        let mut sign: Vec<f64> = start
+            .f_t
+            .iter()
+            .map(|f| if *f < 0.0 { -1.0 } else { 1.0 })
+            .collect();
+        let mut last_update = f64::INFINITY;
+        let mut solved = false;
+        // `W μ` of the current iterate when the last solve gave it.
+        let mut w_mu: Option<Vec<f64>> = None;
+        let mut guard = Guard::new(opt.verbose);
+        for it in 1..=opt.max_iterations {
+            let y: Vec<f64> = match w_mu.take() {
+                Some(w_mu) => w0.iter().zip(&w_mu).map(|(a, b)| a + b).collect(),
+                None => self.y(w0, &mu),
+            };
+            // Sets from the current iterate (without a guess, the first iteration keeps the
+            // committed sets).
+            if solved || guess.is_some() {
+                let trial = Trial {
+                    method: opt.method,
+                    law,
+                    prev,
+                    mu: &mu,
+                    eps: &eps,
+                    fbar_n: &fbar_n,
+                    fbar_t: &fbar_t,
+                };
+                let mut changes = self.update_sets(&trial, &y, &mut status, &mut sign);
+                // A force-driven pilot body that only the contact holds has no equilibrium with
+                // every node open (the system is singular): an iterate that opens them all
+                // overshot, so the closest nodes close again, as at the start of a step.
+                let forced = drive.iter().any(|d| matches!(d, PilotDrive::Force(_)));
+                if self.floating_pilot && forced && status.iter().all(|s| *s == Status::Open) {
+                    let gaps: Vec<f64> = (0..ns).map(|j| self.gap0[j] + y[j]).collect();
+                    seed_closest(&gaps, law.is_some(), &mut status);
+                    changes += 1;
+                }
+                if opt.verbose {
+                    let count = |st: Status| status.iter().filter(|s| **s == st).count();
+                    eprintln!(
+                        "    Newton iteration {it}: {} in contact ({} stick, {} slip), {changes} changed state, relative update {last_update:.2e}",
+                        ns - count(Status::Open),
+                        count(Status::Stick),
+                        count(Status::Slip)
+                    );
+                }
+                // With the sets unchanged the last linear solve is the answer when the equations
+                // are linear in the sets (constant μ); a slip-dependent μ also needs a small update.
+                let linear = law.is_none_or(|l| matches!(l, FrictionLaw::Constant { .. }));
+                if solved && changes == 0 && (linear || last_update <= opt.tolerance) {
+                    if opt.method != Method::AugmentedLagrangian
+                        || self.penetration(&y, &status) <= opt.tolerance
+                    {
+                        return Ok(self.finish(w0, &mu, &status, law, prev, it, last_update));
+                    }
+                    // Outer update of the augmented Lagrangian: the multipliers move to the
+                    // forces, and the penetration shrinks with each round.
+                    fbar_n.copy_from_slice(&mu[..ns]);
+                    fbar_t.copy_from_slice(&mu[ns..2 * ns]);
+                }
+                guard.observe(changes, last_update);
+                if it == opt.max_iterations {
+                    return Err(ContactError::NoConvergence {
+                        iterations: it,
+                        update: last_update,
+                        changes,
+                    });
+                }
+            }
+            self.seed_slip(drive, prev, &mut status, &mut sign);
+            solved = true;
+            let it_ctx = Iterate {
+                substitute: cache.is_none(),
+                w0,
+                drive,
+                law,
+                prev,
+                mu: &mu,
+                status: &status,
+                sign: &sign,
+                method: opt.method,
+                eps: &eps,
+                fbar_n: &fbar_n,
+                fbar_t: &fbar_t,
+            };
+            let (new_mu, w_mu_new) =
+                self.solve_iteration(&it_ctx, cache.as_deref_mut(), it == 1, guard.dense_only)?;
+            w_mu = w_mu_new;
+            let new_mu: Vec<f64> = if guard.relax < 1.0 {
+                // `W μ` from the solve belongs to the full step: recompute it.
+                w_mu = None;
+                mu.iter()
+                    .zip(&new_mu)
+                    .map(|(o, n)| o + guard.relax * (n - o))
+                    .collect()
+            } else {
+                new_mu
+            };
+            let scale = new_mu[..2 * ns]
+                .iter()
+                .fold(0.0f64, |a, v| a.max(v.abs()))
+                .max(f64::MIN_POSITIVE);
+            last_update = (0..2 * ns)
+                .map(|i| (new_mu[i] - mu[i]).abs())
+                .fold(0.0, f64::max)
+                / scale;
+            mu = new_mu;
+        }
+        unreachable!("the loop returns")
+    }
+
+    /// Solves the linear system of one iteration: the structured solve from the cached factor
+    /// when the system allows it, else (or on any trouble there: a singular block, a non-finite
+    /// answer) the dense system, by the cached LU + GMRES or a fresh LU. Returns the new forces
+    /// and, from the structured solve, `W μ` at them.
+    fn solve_iteration(
+        &self,
+        it: &Iterate,
+        mut cache: Option<&mut LuCache>,
+        new_step: bool,
+        dense_only: bool,
+    ) -> Result<(Vec<f64>, Option<Vec<f64>>), ContactError> {
+        let (ns, m) = (self.ns, self.m());
+        if let Some(c) = cache
+            .as_deref_mut()
+            .filter(|_| m >= STRUCTURED_MIN && !dense_only)
+            && let Some(rows) = self.newton_rows(it)
+            && let Some((x, w_mu)) = c.solve_rows(&self.w, &rows, new_step)
+        {
+            let mut new_mu = vec![0.0; m];
+            for (q, &u) in rows.unk.iter().enumerate() {
+                new_mu[u] = x[q];
+            }
+            return Ok((new_mu, Some(w_mu)));
+        }
+        let NewtonSystem {
+            a,
+            b,
+            unk,
+            substituted,
+            slip_lin,
+        } = self.newton_system(it);
+        let nu = unk.len();
+        let x = match cache.as_deref_mut() {
+            Some(c) => c.solve(&unk, &a, &b),
+            None => solve_dense(&a, &b),
+        };
+        let Some(x) = x.filter(|x| (0..nu).all(|i| x[(i, 0)].is_finite())) else {
+            if let Some(c) = cache {
+                c.clear();
+            }
+            return Err(ContactError::Singular {
+                unknowns: nu,
+                in_contact: it.status.iter().filter(|s| **s != Status::Open).count(),
+            });
+        };
+        let mut new_mu = vec![0.0; m];
+        for (q, &u) in unk.iter().enumerate() {
+            new_mu[u] = x[(q, 0)];
+        }
+        for j in 0..ns {
+            if substituted[j] && it.status[j] == Status::Slip {
+                new_mu[ns + j] = it.sign[j] * slip_lin[j].mu * new_mu[j];
+            }
+        }
+        Ok((new_mu, None))
+    }
+
+    /// The largest penetration of the nodes in contact relative to their element size (the
+    /// augmented Lagrangian's outer stopping test).
+    fn penetration(&self, y: &[f64], status: &[Status]) -> f64 {
+        (0..self.ns)
+            .filter(|&j| status[j] != Status::Open)
+            .map(|j| (-(self.gap0[j] + y[j])).max(0.0) / self.eps_h(j))
+            .fold(0.0, f64::max)
+    }
+
+    /// Under slip control the slip constraint contradicts a contact that sticks everywhere
+    /// (the system is singular): when no node in contact slips, the two outermost nodes in
+    /// contact start slipping in the driven direction, and the iteration finds the slip zones
+    /// from there.
+    fn seed_slip(
+        &self,
+        drive: [PilotDrive; 2],
+        prev: &State,
+        status: &mut [Status],
+        sign: &mut [f64],
+    ) {
+        let PilotDrive::Slip(target) = drive[0] else {
+            return;
+        };
+        let dm = target - prev.mean_slip;
+        if !self.has_pilot || dm == 0.0 || status.contains(&Status::Slip) {
+            return;
+        }
+        let on: Vec<usize> = (0..self.ns)
+            .filter(|&j| status[j] != Status::Open)
+            .collect();
+        if let (Some(&first), Some(&last)) = (on.first(), on.last()) {
+            for j in [first, last] {
+                status[j] = Status::Slip;
+                // The master's tangential force opposes its slip.
+                sign[j] = -self.slip_orient * dm.signum();
+            }
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn finish(
+        &self,
+        w0: &[f64],
+        mu: &[f64],
+        status: &[Status],
+        law: Option<&FrictionLaw>,
+        prev: &State,
+        iterations: usize,
+        last_update: f64,
+    ) -> StepOutcome {
+        let ns = self.ns;
+        let y = self.y(w0, mu);
+        let mut st = prev.clone();
+        let omega = self.slip_weights(prev);
+        st.mean_slip = prev.mean_slip
+            + (0..ns)
+                .map(|j| omega[j] * (y[ns + j] - prev.v[j]))
+                .sum::<f64>();
+        for j in 0..ns {
+            st.f_n[j] = mu[j];
+            st.f_t[j] = mu[ns + j];
+            st.gap[j] = self.gap0[j] + y[j];
+            st.v[j] = y[ns + j];
+            st.dv[j] = y[ns + j] - prev.v[j];
+            st.slip[j] = prev.slip[j]
+                + if status[j] == Status::Slip {
+                    st.dv[j].abs()
+                } else {
+                    0.0
+                };
+            st.status[j] = status[j];
+            st.mu[j] = law.map_or(0.0, |l| l.mu(st.slip[j]));
+        }
+        for k in 0..self.kg.len() {
+            st.z[k] = mu[2 * ns + k];
+        }
+        if self.has_pilot {
+            for k in 0..2 {
+                st.pilot_u[k] = y[2 * ns + k];
+                st.pilot_f[k] = st.z[k] - self.kg[k] * st.pilot_u[k];
+            }
+        }
+        StepOutcome {
+            state: st,
+            iterations,
+            last_update,
+        }
+    }
+}
+
+/// Puts the three nodes of smallest gap in contact (stick with friction, else slip): three
+/// nodes span both sides of the closest point, which holds a body the pilot pushes and stops a
+/// frictionless rigid sliding mode.
+fn seed_closest(gaps: &[f64], friction: bool, status: &mut [Status]) {
+    let mut order: Vec<usize> = (0..gaps.len()).collect();
+    order.sort_by(|&a, &b| gaps[a].total_cmp(&gaps[b]));
+    for &j in order.iter().take(3) {
+        status[j] = if friction {
+            Status::Stick
+        } else {
+            Status::Slip
+        };
+    }
+}
+
+/// The safeguards of the Newton iteration of one step.
+struct Guard {
+    verbose: bool,
+    /// Iterations in a row with the sets settled and the update small but above the
+    /// tolerance, and whether the structured solve has been given up for this step: its
+    /// accuracy (a Woodbury update of a cached factor, `W μ` taken from the equations) can
+    /// floor the update near 1e-8 on ill-conditioned systems (a steep μ′ with many slip
+    /// nodes), where the dense LU still converges.
+    stalled: usize,
+    dense_only: bool,
+    /// Iterations in a row with the sets fixed and the update not contracting (Newton
+    /// cycling across a kink of μ(u), e.g. the end of a ramp, where μ′ jumps), and the
+    /// relaxation applied to the update once that is detected.
+    cycling: usize,
+    relax: f64,
+    prev_update: f64,
+}
+
+impl Guard {
+    fn new(verbose: bool) -> Self {
+        Guard {
+            verbose,
+            stalled: 0,
+            dense_only: false,
+            cycling: 0,
+            relax: 1.0,
+            prev_update: f64::INFINITY,
+        }
+    }
+
+    /// Records an iteration that did not converge.
+    fn observe(&mut self, changes: usize, update: f64) {
+        if changes == 0 && update > 1e-5 && update >= 0.5 * self.prev_update {
+            self.cycling += 1;
+            if self.cycling >= 3 && self.relax == 1.0 {
+                self.relax = 0.5;
+                if self.verbose {
+                    eprintln!(
+                        "    the update does not contract ({update:.2e}): halving the steps from here on"
+                    );
+                }
+            }
+        } else {
+            self.cycling = 0;
+        }
+        self.prev_update = update;
+        if changes == 0 && update < 1e-5 {
+            self.stalled += 1;
+            if self.stalled >= 2 && !self.dense_only {
+                self.dense_only = true;
+                if self.verbose {
+                    eprintln!(
+                        "    the update stalls at {update:.2e}: solving the assembled system from here on"
+                    );
+                }
+            }
+        } else {
+            self.stalled = 0;
+        }
+    }
+}
