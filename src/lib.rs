@@ -12,6 +12,7 @@ pub mod checks;
 pub mod condense;
 pub mod contact;
 pub mod dofs;
+pub mod driver;
 pub mod elasticity;
 pub mod error;
 pub mod friction;

@@ -2,7 +2,9 @@
 //! the closed forms through [`crate::analytic`]), the self-checks of the last converged step,
 //! `summary.json` and the one-screen end summary.
 
+use crate::case::Case;
 use crate::contact::solver::State;
+use crate::driver::Simulation;
 use crate::model::Model;
 use crate::model::step::{ContactFigures, PilotState};
 use serde::Serialize;
@@ -289,4 +291,188 @@ pub fn friction_summary(
         apparent_friction_jkr,
         apparent_friction_dcm,
     })
+}
+
+/// `history.csv`: one row per converged step (integer columns printed as integers).
+pub fn history_csv(records: &[StepRecord]) -> String {
+    let rows: Vec<Vec<f64>> = records
+        .iter()
+        .map(|r| {
+            let p = r.pilot.unwrap_or_default();
+            let c = r.contact.unwrap_or_default();
+            vec![
+                r.step as f64,
+                r.stage as f64,
+                r.time,
+                r.traction_scale,
+                p.ux,
+                p.uy,
+                p.fx,
+                p.fy,
+                r.iterations as f64,
+                r.cutbacks as f64,
+                c.n_contact as f64,
+                c.n_stick as f64,
+                c.n_slip as f64,
+                c.a,
+                c.x_centre,
+                c.c,
+                c.b,
+                c.fx,
+                c.fy,
+                r.wall_s,
+                c.mean_slip,
+            ]
+        })
+        .collect();
+    crate::output::csv(
+        &[
+            "step",
+            "stage",
+            "time",
+            "traction_scale",
+            "pilot_ux",
+            "pilot_uy",
+            "pilot_fx",
+            "pilot_fy",
+            "iterations",
+            "cutbacks",
+            "n_contact",
+            "n_stick",
+            "n_slip",
+            "a",
+            "x_centre",
+            "c",
+            "b",
+            "contact_fx",
+            "contact_fy",
+            "wall_s",
+            "mean_slip",
+        ],
+        &rows,
+        &[
+            "step",
+            "stage",
+            "iterations",
+            "cutbacks",
+            "n_contact",
+            "n_stick",
+            "n_slip",
+        ],
+    )
+}
+
+/// The summary of a finished (or stopped) run, with why it stopped: the failure (a solver
+/// failure, or an error-level check of the last step) and the bracket of a lost equilibrium.
+pub fn summarise(
+    model: &Model,
+    case: &Case,
+    case_path: &Path,
+    out_dir: &Path,
+    sim: Simulation,
+) -> (Summary, Option<String>, Option<(f64, f64)>) {
+    let Simulation {
+        records,
+        mut failure,
+        lost_equilibrium,
+        newton_iterations,
+        lu_factorisations,
+        gmres_iterations,
+        contact_solve_s,
+        last_u,
+        last_state,
+        last_scale,
+        ..
+    } = sim;
+    let q_max = records
+        .iter()
+        .filter_map(|r| r.pilot)
+        .map(|p| p.fx.abs())
+        .fold(0.0, f64::max);
+    let friction = friction_summary(
+        model,
+        model.friction.as_ref(),
+        records.last().and_then(|r| r.contact),
+        q_max,
+    );
+    let checks = final_checks(
+        model,
+        last_u,
+        last_state.as_ref(),
+        last_scale,
+        &records,
+        friction.as_ref(),
+    );
+    if failure.is_none() {
+        failure = failed_check(&checks);
+    }
+    let status = match (&failure, lost_equilibrium) {
+        (None, _) => "completed".into(),
+        (Some(_), Some((q, qf))) => {
+            // Below f_d P the contact can carry the load: a local peak, not gross sliding.
+            match friction.as_ref().and_then(|f| f.local_peak(q)) {
+                None => format!("equilibrium lost: Q_max = {q:.6} (no equilibrium at {qf:.6})"),
+                Some(fdp) => format!(
+                    "equilibrium lost at a local peak (not gross sliding: Q_max < f_d P = {fdp:.6}): Q_max = {q:.6} (no equilibrium at {qf:.6})"
+                ),
+            }
+        }
+        (Some(m), None) => format!("failed at {m}; the output holds the steps before it"),
+    };
+    let summary = Summary {
+        case: case_path.display().to_string(),
+        title: case.title.clone(),
+        mesh: model.mesh.source.display().to_string(),
+        nodes: model.active.iter().filter(|a| **a).count(),
+        triangles: model.elems.len(),
+        dofs_free: model.dofs.n_free(),
+        dofs_retained: model.dofs.n_retained,
+        contact_nodes: model.contact.as_ref().map_or(0, |c| c.system.ns),
+        candidate_gap: model.contact.as_ref().map(|c| c.pair.candidate_gap),
+        stiffness_nonzeros_upper: model.k.row_idx.len(),
+        threads: rayon::current_num_threads(),
+        timings_s: model.timings.clone(),
+        contact_solve_s,
+        newton_iterations,
+        lu_factorisations,
+        gmres_iterations,
+        peak_memory_mib: crate::output::peak_memory_bytes()
+            .map(|b| b as f64 / (1024.0 * 1024.0)),
+        friction,
+        checks,
+        steps: records,
+        output_dir: out_dir.display().to_string(),
+        status,
+    };
+    (summary, failure, lost_equilibrium)
+}
+
+/// Prints the warnings of a summary (`show`: the log level lets warnings through): an
+/// unresolved slip-weakening transition, and every warning-level check.
+pub fn print_warnings(summary: &Summary, show: bool) {
+    if !show {
+        return;
+    }
+    if let Some(fr) = &summary.friction
+        && fr.resolved == Some(false)
+    {
+        eprintln!(
+            "warning: the contact elements (h = {:.3e}) are larger than s0/2 = {:.3e}: the slip-weakening transition zone is not resolved; use a finer mesh along the faces",
+            fr.h_contact,
+            fr.s0_over_a.unwrap_or(0.0) * fr.a_hertz / 2.0
+        );
+    }
+    for c in &summary.checks {
+        // The s0 warning is printed above in its own words.
+        if c.level == crate::checks::Level::Warning && c.name != "s0_resolution" {
+            eprintln!(
+                "warning: check `{}`: {:.4e} against {} {:.4e}: {}",
+                c.name,
+                c.value,
+                if c.at_least { "at least" } else { "at most" },
+                c.limit,
+                c.note
+            );
+        }
+    }
 }

@@ -3,6 +3,7 @@
 //! a run that stops leaves either a whole file or none.
 
 pub mod fields;
+pub mod series;
 pub mod vtu;
 
 use std::io::Write;

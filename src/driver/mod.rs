@@ -1,0 +1,450 @@
+//! The load-path driver: the stages of a case stepped on a built model, with a predictor
+//! from the last two steps, cutbacks of a step that does not converge, and the bracketing of
+//! the peak tangential force when a force-controlled load passes it. It reads the model and
+//! the case, and hands every converged step to its caller ([`StepEvent`]); it writes nothing.
+
+mod unheld;
+
+use crate::case::{Case, Control, Stage};
+use crate::contact::solver::{self, State, Status};
+use crate::error::RunError;
+use crate::friction::FrictionLaw;
+use crate::model::Model;
+use crate::model::StepLoad;
+use crate::model::step::PilotState;
+use crate::report::StepRecord;
+use std::time::Instant;
+use unheld::{unheld_after, unheld_before};
+
+/// Halvings of a load increment before a step is given up.
+pub const MAX_CUTBACKS: usize = 12;
+
+/// How much a run prints to standard error.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, clap::ValueEnum)]
+pub enum LogLevel {
+    Error,
+    Warn,
+    #[default]
+    Info,
+    Debug,
+}
+
+/// One converged step, handed to the caller of [`simulate`].
+pub struct StepEvent<'a> {
+    pub step: usize,
+    pub time: f64,
+    pub scale: f64,
+    /// Whether this is the last step of the last stage.
+    pub last: bool,
+    /// The free solution, where the step computed it (runs without contact).
+    pub u: Option<&'a Vec<f64>>,
+    /// The contact state (runs with contact; the full field is recovered on demand).
+    pub contact: Option<&'a State>,
+    /// The record of this step.
+    pub record: &'a StepRecord,
+}
+
+/// What [`simulate`] returns.
+pub struct Simulation {
+    pub records: Vec<StepRecord>,
+    /// Why the run stopped early, if it did.
+    pub failure: Option<String>,
+    /// (Q_max, the load at which no equilibrium was found) when a force-controlled tangential
+    /// load passed the peak.
+    pub lost_equilibrium: Option<(f64, f64)>,
+    pub newton_iterations: usize,
+    /// Dense factorisations and GMRES iterations of the contact Newton solves.
+    pub lu_factorisations: usize,
+    pub gmres_iterations: usize,
+    pub solve_s: f64,
+    pub contact_solve_s: f64,
+    /// The last converged step: its free solution (runs without contact), contact state and
+    /// traction scale.
+    pub last_u: Option<Vec<f64>>,
+    pub last_state: Option<State>,
+    pub last_scale: f64,
+}
+
+/// Steps through the stages of a case on a built model with friction law `law` (overriding
+/// the model's), calling `on_step` after every converged step. Steps that do not converge are
+/// cut back (halved) up to [`MAX_CUTBACKS`] times from the last converged state.
+pub fn simulate(
+    model: &Model,
+    case: &Case,
+    law: Option<&FrictionLaw>,
+    log: LogLevel,
+    on_step: &mut dyn FnMut(&StepEvent) -> Result<(), RunError>,
+) -> Result<Simulation, RunError> {
+    let mut d = Driver {
+        model,
+        case,
+        law: law.cloned(),
+        quiet: log < LogLevel::Warn,
+        copt: case.contact.as_ref().map(|c| solver::Options {
+            method: c.method,
+            kappa: c.penalty.unwrap_or(100.0),
+            max_iterations: c.max_iterations.unwrap_or(60),
+            tolerance: c.tolerance.unwrap_or(1e-8),
+            verbose: log >= LogLevel::Debug,
+        }),
+        cstate: model.contact.as_ref().map(|c| c.system.initial_state()),
+        lu_cache: solver::LuCache::default(),
+        control: [Control::Force(0.0); 2],
+        pilot: PilotState::default(),
+        scale: 0.0,
+        records: Vec::new(),
+        t_solve: 0.0,
+        t_contact: 0.0,
+        newton_total: 0,
+        failure: None,
+        bracket: None,
+        lost_equilibrium: None,
+        last_u: None,
+    };
+    for (si, stage) in case.stages.iter().enumerate() {
+        if !d.run_stage(si, stage, on_step)? {
+            break;
+        }
+    }
+    Ok(Simulation {
+        failure: d.failure,
+        lost_equilibrium: d.lost_equilibrium,
+        newton_iterations: d.newton_total,
+        lu_factorisations: d.lu_cache.factorisations,
+        gmres_iterations: d.lu_cache.gmres_iterations,
+        solve_s: d.t_solve,
+        contact_solve_s: d.t_contact,
+        last_u: d.last_u,
+        last_state: if d.records.is_empty() { None } else { d.cstate },
+        last_scale: d.scale,
+        records: d.records,
+    })
+}
+
+/// The committed loads at the start of a stage, from which its steps interpolate.
+#[derive(Clone, Copy)]
+struct StageStart {
+    pilot: PilotState,
+    scale: f64,
+    control: [Control; 2],
+    mean_slip: f64,
+}
+
+impl StageStart {
+    /// The pilot's drive at the fraction `a` of the stage towards `target`.
+    fn control_at(&self, target: [Option<Control>; 2], a: f64) -> [Control; 2] {
+        let (u0, r0, m0) = (
+            [self.pilot.ux, self.pilot.uy],
+            [self.pilot.fx, self.pilot.fy],
+            self.mean_slip,
+        );
+        std::array::from_fn(|c| match (target[c], self.control[c]) {
+            (Some(Control::Force(f)), _) => Control::Force(r0[c] + a * (f - r0[c])),
+            (Some(Control::Displacement(d)), _) => {
+                Control::Displacement(u0[c] + a * (d - u0[c]))
+            }
+            (None, Control::Force(_)) => Control::Force(r0[c]),
+            (None, Control::Displacement(_)) => Control::Displacement(u0[c]),
+            (Some(Control::Slip(s)), _) => Control::Slip(m0 + a * (s - m0)),
+            (None, Control::Slip(_)) => Control::Slip(m0),
+        })
+    }
+
+    /// Whether a stage towards `target` (and traction scale `scale`) changes no load: a hold.
+    fn is_hold(&self, target: [Option<Control>; 2], scale: Option<f64>) -> bool {
+        scale.is_none_or(|v| v == self.scale)
+            && (0..2).all(|c| match (target[c], self.control[c]) {
+                (None, _) => true,
+                (Some(Control::Force(f)), Control::Force(f0)) => f == f0,
+                (Some(Control::Displacement(d)), _) => d == [self.pilot.ux, self.pilot.uy][c],
+                (Some(Control::Slip(s)), _) => s == self.mean_slip,
+                (Some(Control::Force(_)), _) => false,
+            })
+    }
+}
+
+/// Why a step attempt gave no converged state.
+enum Attempt {
+    /// The solve failed or its answer means nothing: cut the increment back.
+    Retry(String),
+    /// Nothing to retry (a run without contact whose solve failed).
+    Stop(String),
+    /// The run cannot go on as set up (the contact reached the rim of its candidate zone).
+    Fatal(RunError),
+}
+
+/// The state of a run between steps.
+struct Driver<'a> {
+    model: &'a Model,
+    case: &'a Case,
+    law: Option<FrictionLaw>,
+    quiet: bool,
+    copt: Option<solver::Options>,
+    cstate: Option<State>,
+    lu_cache: solver::LuCache,
+    control: [Control; 2],
+    pilot: PilotState,
+    scale: f64,
+    records: Vec<StepRecord>,
+    t_solve: f64,
+    t_contact: f64,
+    newton_total: usize,
+    failure: Option<String>,
+    /// The last converged tangential force and the first that failed, while cutbacks bisect.
+    bracket: Option<(f64, f64)>,
+    lost_equilibrium: Option<(f64, f64)>,
+    last_u: Option<Vec<f64>>,
+}
+
+impl Driver<'_> {
+    /// Runs the steps of stage `si`; `false` when the run stops (a failure is recorded).
+    fn run_stage(
+        &mut self,
+        si: usize,
+        stage: &Stage,
+        on_step: &mut dyn FnMut(&StepEvent) -> Result<(), RunError>,
+    ) -> Result<bool, RunError> {
+        let start = StageStart {
+            pilot: self.pilot,
+            scale: self.scale,
+            control: self.control,
+            mean_slip: self.cstate.as_ref().map_or(0.0, |s| s.mean_slip),
+        };
+        let target = [stage.pilot_x, stage.pilot_y];
+        let nominal = 1.0 / stage.steps as f64;
+        let (mut alpha, mut dalpha) = (0.0, nominal);
+        // The state before the last converged one, with its load fraction (none across stages).
+        let mut older: Option<(f64, State)> = None;
+        let mut cutbacks = 0;
+        // A stage that changes no load (a hold): every step of it keeps the converged state.
+        let hold = start.is_hold(target, stage.traction_scale);
+        while alpha < 1.0 - 1e-12 {
+            let a_new = (alpha + dalpha).min(1.0);
+            let t = Instant::now();
+            let sc = match stage.traction_scale {
+                Some(v) => start.scale + a_new * (v - start.scale),
+                None => start.scale,
+            };
+            let ctl = start.control_at(target, a_new);
+            let step = self.records.len() + 1;
+            if let Some(why) = unheld_before(self.model, self.case, &ctl) {
+                self.failure = Some(format!("step {step}: {why}"));
+                return Ok(false);
+            }
+            let attempt = match self.cstate.take() {
+                Some(prev) => {
+                    let res = self.contact_attempt(&prev, sc, ctl, (alpha, a_new), &older, hold);
+                    match res {
+                        Ok((state, p, it)) => {
+                            older = Some((alpha, prev));
+                            self.cstate = Some(state);
+                            Ok((None, p, it))
+                        }
+                        Err(e) => {
+                            self.cstate = Some(prev);
+                            Err(e)
+                        }
+                    }
+                }
+                None => match self.model.solve_step(sc, ctl) {
+                    Ok((u, p)) => Ok((Some(u), p, 0)),
+                    Err(m) => Err(Attempt::Stop(m)),
+                },
+            };
+            let (u, p, iterations) = match attempt {
+                Ok(c) => c,
+                Err(Attempt::Fatal(e)) => return Err(e),
+                Err(Attempt::Stop(m)) => {
+                    self.failure = Some(format!("step {step}: {m}"));
+                    return Ok(false);
+                }
+                Err(Attempt::Retry(e)) => {
+                    // Failed attempts count in the solve time too (they can dominate a run
+                    // that brackets Q_max).
+                    self.t_solve += t.elapsed().as_secs_f64();
+                    self.note_failed_load(ctl, target[0]);
+                    if cutbacks < MAX_CUTBACKS {
+                        cutbacks += 1;
+                        dalpha *= 0.5;
+                        if !self.quiet {
+                            eprintln!(
+                                "step {step} of stage {si}: {e}; cutting the load increment back to {dalpha:.3e} of the stage"
+                            );
+                        }
+                        continue;
+                    }
+                    self.failure = Some(format!("step {step}: {e} (after {MAX_CUTBACKS} cutbacks)"));
+                    self.lost_equilibrium = self.bracket;
+                    return Ok(false);
+                }
+            };
+            if !self.finite(u.as_ref()) {
+                self.failure = Some(format!("step {step}: the solution is not finite"));
+                return Ok(false);
+            }
+            alpha = a_new;
+            self.control = ctl;
+            self.scale = sc;
+            if let Some(p) = p {
+                self.pilot = p;
+            }
+            let wall = t.elapsed().as_secs_f64();
+            self.t_solve += wall;
+            let last = si + 1 == self.case.stages.len() && alpha >= 1.0 - 1e-12;
+            self.record(si, alpha, iterations, cutbacks, wall);
+            on_step(&StepEvent {
+                step,
+                time: si as f64 + alpha,
+                scale: sc,
+                last,
+                u: u.as_ref(),
+                contact: self.cstate.as_ref(),
+                record: self.records.last().expect("pushed above"),
+            })?;
+            if u.is_some() {
+                self.last_u = u;
+            }
+            // The cutback count is per step: the next step starts afresh.
+            cutbacks = 0;
+            if dalpha < nominal {
+                dalpha = (2.0 * dalpha).min(nominal);
+            }
+        }
+        Ok(true)
+    }
+
+    /// One contact solve from the committed state `prev` to the fraction `a.1` of the stage
+    /// (from `a.0`), with a predictor from the state `older` before it.
+    fn contact_attempt(
+        &mut self,
+        prev: &State,
+        scale: f64,
+        ctl: [Control; 2],
+        (alpha, a_new): (f64, f64),
+        older: &Option<(f64, State)>,
+        hold: bool,
+    ) -> Result<(State, Option<PilotState>, usize), Attempt> {
+        let opt = self.copt.as_ref().expect("a contact state comes with contact options");
+        let tc = Instant::now();
+        let res = if !self.records.is_empty() && hold {
+            // A step that changes no load (a hold) from a converged state: that state is its
+            // answer, with no slip in the step (rate-independent friction). A Newton solve
+            // could cycle at the tolerance between nodes on the Coulomb limit and be mistaken
+            // for a lost equilibrium.
+            let mut state = prev.clone();
+            state.dv.iter_mut().for_each(|v| *v = 0.0);
+            Ok(solver::StepOutcome {
+                state,
+                iterations: 0,
+                last_update: 0.0,
+            })
+        } else {
+            let guess = older
+                .as_ref()
+                .filter(|(a0, _)| *a0 >= 0.0)
+                .map(|(a_old, old)| predict(prev, old, (a_new - alpha) / (alpha - a_old).max(1e-300)));
+            self.model.solve_contact_step(
+                StepLoad {
+                    scale,
+                    control: ctl,
+                },
+                prev,
+                guess.as_ref(),
+                opt,
+                self.law.as_ref(),
+                Some(&mut self.lu_cache),
+            )
+        };
+        self.t_contact += tc.elapsed().as_secs_f64();
+        let out = res.map_err(|e| Attempt::Retry(e.to_string()))?;
+        // Clipping: contact on the rim of the candidate zone.
+        let cm = self.model.contact.as_ref().expect("contact");
+        let rim = cm
+            .pair
+            .mortar
+            .slave_nodes
+            .iter()
+            .zip(&out.state.status)
+            .any(|(n, s)| *s != Status::Open && cm.pair.rim_nodes.binary_search(n).is_ok());
+        if rim {
+            return Err(Attempt::Fatal(RunError::ZoneClipped {
+                gap: cm.pair.candidate_gap,
+                step: self.records.len() + 1,
+            }));
+        }
+        // A converged answer of an unheld body is a failed step: under force control the
+        // cutbacks then bracket the load that lost equilibrium.
+        if let Some(why) = unheld_after(self.model, self.case, &ctl, &out.state) {
+            return Err(Attempt::Retry(why));
+        }
+        let p = PilotState {
+            ux: out.state.pilot_u[0],
+            uy: out.state.pilot_u[1],
+            fx: out.state.pilot_f[0],
+            fy: out.state.pilot_f[1],
+        };
+        self.newton_total += out.iterations;
+        let pilot = self.model.dofs.pilot.is_some().then_some(p);
+        Ok((out.state, pilot, out.iterations))
+    }
+
+    /// A force-controlled tangential load that no equilibrium carries: the cutbacks bisect
+    /// between the last converged load and this one; a failure that survives all of them is
+    /// reported as the loss of equilibrium. (Only when the step raised that load: a step that
+    /// failed at the load of the last converged one is a solver failure, not a peak.)
+    fn note_failed_load(&mut self, ctl: [Control; 2], target_x: Option<Control>) {
+        if let (Control::Force(f), Some(Control::Force(_)), true) =
+            (ctl[0], target_x, self.law.is_some())
+            && ctl[0] != self.control[0]
+        {
+            self.bracket = Some((self.pilot.fx, f));
+        }
+    }
+
+    fn finite(&self, u: Option<&Vec<f64>>) -> bool {
+        match (u, &self.cstate) {
+            (Some(u), _) => u.iter().all(|v| v.is_finite()),
+            (None, Some(st)) => st
+                .f_n
+                .iter()
+                .chain(&st.f_t)
+                .chain(&st.z)
+                .all(|v| v.is_finite()),
+            (None, None) => true,
+        }
+    }
+
+    fn record(&mut self, si: usize, alpha: f64, iterations: usize, cutbacks: usize, wall: f64) {
+        let figures = self
+            .cstate
+            .as_ref()
+            .map(|st| self.model.contact_figures(st, self.law.as_ref()));
+        self.records.push(StepRecord {
+            step: self.records.len() + 1,
+            stage: si,
+            time: si as f64 + alpha,
+            traction_scale: self.scale,
+            pilot: self.model.dofs.pilot.is_some().then_some(self.pilot),
+            iterations,
+            cutbacks,
+            contact: figures,
+            wall_s: wall,
+        });
+    }
+}
+
+/// The predicted forces of the next step: the last two states extrapolated by `t` (the ratio
+/// of the next increment to the last), normal forces kept non-negative.
+fn predict(prev: &State, old: &State, t: f64) -> State {
+    let ext = |c: &[f64], o: &[f64]| -> Vec<f64> {
+        c.iter().zip(o).map(|(c, o)| c + t * (c - o)).collect()
+    };
+    let mut g = prev.clone();
+    g.f_n = ext(&prev.f_n, &old.f_n)
+        .into_iter()
+        .map(|v| v.max(0.0))
+        .collect();
+    g.f_t = ext(&prev.f_t, &old.f_t);
+    g.z = ext(&prev.z, &old.z);
+    g
+}

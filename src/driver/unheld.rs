@@ -1,0 +1,62 @@
+//! Loads that no equilibrium can carry: a pilot that pulls a body nothing else holds, or an
+//! answer in which that body floats free or ran away.
+
+use crate::case::{Case, Control};
+use crate::contact::solver::{State, Status};
+use crate::model::Model;
+
+/// The pilot's drive along the direction that separates its (otherwise unheld) body from the
+/// contact: the dominant component of that direction, and its force if force-controlled.
+fn separating_force(model: &Model, ctl: &[Control; 2]) -> Option<(usize, usize, Option<f64>)> {
+    let (body, sep) = model.pilot_separation?;
+    let k = if sep[0].abs() > sep[1].abs() { 0 } else { 1 };
+    let f = match ctl[k] {
+        Control::Force(f) => Some(f * sep[k].signum()),
+        Control::Displacement(_) | Control::Slip(_) => None,
+    };
+    Some((body, k, f))
+}
+
+/// A step that cannot have an equilibrium: the pilot pulls a body that nothing else holds away
+/// from the contact (a force along the separating direction).
+pub(super) fn unheld_before(model: &Model, case: &Case, ctl: &[Control; 2]) -> Option<String> {
+    let (body, k, f) = separating_force(model, ctl)?;
+    let f = f.filter(|f| *f > 0.0)?;
+    Some(format!(
+        "the pilot's force pilot_{} = {:e} pulls `{}` away from the contact, and nothing else \
+         holds that body (no support): no equilibrium exists; press the bodies together or \
+         control the pilot by displacement",
+        ["x", "y"][k],
+        f * model.pilot_separation.expect("checked").1[k].signum(),
+        case.bodies[body].group
+    ))
+}
+
+/// A converged step whose answer means nothing: a force-controlled pilot body with no node in
+/// contact and no support (held only by the solver's grounding spring), or a pilot that ran
+/// away (see [`crate::checks::DISPLACEMENT_ERROR`]).
+pub(super) fn unheld_after(model: &Model, case: &Case, ctl: &[Control; 2], st: &State) -> Option<String> {
+    let size = model.mesh.diameter();
+    let u = st.pilot_u[0].hypot(st.pilot_u[1]);
+    let limit = crate::checks::DISPLACEMENT_ERROR;
+    if model.dofs.pilot.is_some() && (u.is_nan() || u > limit * size) {
+        return Some(format!(
+            "the pilot moved {u:e}, more than {limit} times the model's size {size:e}: a body is \
+             not held (check the supports and that the loads press the bodies together)"
+        ));
+    }
+    let (body, k, f) = separating_force(model, ctl)?;
+    f?;
+    if st.status.iter().all(|s| *s == Status::Open) {
+        return Some(format!(
+            "no node is in contact and nothing else holds `{}` along {} (no support, pilot_{} \
+             force-controlled): the body is free; press the bodies together or control the pilot \
+             by displacement",
+            case.bodies[body].group,
+            ["x", "y"][k],
+            ["x", "y"][k]
+        ));
+    }
+    None
+}
+
