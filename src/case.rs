@@ -193,21 +193,23 @@ impl<'de> Deserialize<'de> for FrictionSpec {
 
 impl FrictionSpec {
     /// The law, with Δ from Λ resolved with the pair's composite modulus `e_star`.
-    pub fn resolve(&self, e_star: f64) -> Result<crate::friction::FrictionLaw, String> {
-        use crate::friction::{FrictionLaw, Shape};
+    pub fn resolve(
+        &self,
+        e_star: f64,
+    ) -> Result<crate::friction::FrictionLaw, crate::friction::FrictionError> {
+        use crate::friction::{FrictionError, FrictionLaw, Shape};
         let shape = |s: &str| match s {
             "ramp" => Ok(Shape::Ramp),
             "step" => Ok(Shape::Step),
             "exponential" => Ok(Shape::Exponential),
-            other => Err(format!(
-                "friction: shape `{other}` is not one of ramp, step, exponential"
-            )),
+            other => Err(FrictionError::UnknownShape {
+                name: other.to_string(),
+            }),
         };
         match self {
             FrictionSpec::Law(l) => Ok(l.clone()),
             FrictionSpec::Preset { preset, shape: s } => {
                 FrictionLaw::preset_shaped(preset, shape(s.as_deref().unwrap_or("ramp"))?)
-                    .map_err(|e| format!("friction: {e}"))
             }
             FrictionSpec::Lambda {
                 shape: s,
@@ -219,13 +221,12 @@ impl FrictionSpec {
             } => {
                 for (k, v) in [("lambda", lambda), ("radius", radius), ("load", load)] {
                     if !(*v > 0.0 && v.is_finite()) {
-                        return Err(format!("friction: `{k}` = {v} must be > 0"));
+                        return Err(FrictionError::NotPositive { name: k, value: *v });
                     }
                 }
                 let a2 = 4.0 * load * radius / (std::f64::consts::PI * e_star);
                 let delta = lambda * (fs - fd) * a2 / radius;
                 FrictionLaw::shaped(shape(s)?, *fs, *fd, delta)
-                    .map_err(|e| format!("friction: {e}"))
             }
         }
     }
@@ -577,7 +578,7 @@ impl Case {
                 return Err(bad(
                     "contact.friction".into(),
                     serde_json::to_string(f).unwrap_or_default(),
-                    why.trim_start_matches("friction: "),
+                    &why.to_string(),
                 ));
             }
             if let Some(n) = c.max_iterations

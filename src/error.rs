@@ -1,7 +1,64 @@
 //! Why a run stopped, and the process exit status of each reason (the one place exit codes are
 //! mapped).
 
+use crate::contact::solver::ContactError;
 use crate::model::ModelError;
+
+/// Why a load step has no answer.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum StepError {
+    #[error(transparent)]
+    Contact(#[from] ContactError),
+    #[error("slip control needs frictional contact")]
+    SlipWithoutFriction,
+    #[error(
+        "the pilot is force-controlled but the body it drives is not held in that direction \
+         (no support and no contact): control it by displacement instead"
+    )]
+    PilotUnheld,
+    #[error(
+        "the pilot's force pilot_{axis} = {force:e} pulls `{body}` away from the contact, and \
+         nothing else holds that body (no support): no equilibrium exists; press the bodies \
+         together or control the pilot by displacement"
+    )]
+    PulledApart {
+        axis: &'static str,
+        force: f64,
+        body: String,
+    },
+    #[error(
+        "the pilot moved {moved:e}, more than {limit} times the model's size {size:e}: a body is \
+         not held (check the supports and that the loads press the bodies together)"
+    )]
+    RanAway { moved: f64, limit: f64, size: f64 },
+    #[error(
+        "no node is in contact and nothing else holds `{body}` along {axis} (no support, \
+         pilot_{axis} force-controlled): the body is free; press the bodies together or control \
+         the pilot by displacement"
+    )]
+    Free { body: String, axis: &'static str },
+    #[error("the solution is not finite")]
+    NotFinite,
+}
+
+/// A step that failed for good: its number, why, and the cutbacks tried first.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("step {step}: {cause}{}", cutbacks.map_or(String::new(), |n| format!(" (after {n} cutbacks)")))]
+pub struct StepFailure {
+    pub step: usize,
+    pub cause: StepError,
+    pub cutbacks: Option<usize>,
+}
+
+/// An error-level self-check of the last converged step (see [`crate::checks`]).
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("the last step: check `{name}` failed ({value:.3e} against {limit:.3e}): {note}")]
+pub struct CheckFailure {
+    pub name: String,
+    pub value: f64,
+    pub limit: f64,
+    pub note: String,
+}
 
 /// Why a run stopped.
 #[derive(Debug, thiserror::Error)]
@@ -10,8 +67,15 @@ pub enum RunError {
     Case(#[from] crate::case::CaseError),
     #[error(transparent)]
     Model(#[from] ModelError),
-    #[error("{0}")]
-    Solve(String),
+    #[error(transparent)]
+    Step(#[from] StepFailure),
+    #[error(transparent)]
+    Check(#[from] CheckFailure),
+    #[error(
+        "the contact zone kept growing (candidate gap {gap:e} after {doublings} doublings): check \
+         the loads and the candidate gap"
+    )]
+    ZoneKeptGrowing { gap: f64, doublings: usize },
     #[error("cannot write output `{path}`: {source}")]
     Write {
         path: String,
@@ -43,10 +107,12 @@ impl RunError {
                 | ModelError::Dof { .. }
                 | ModelError::Edge { .. }
                 | ModelError::Contact { .. }
-                | ModelError::Unsupported(_),
+                | ModelError::Friction(_),
             ) => 2,
             RunError::Model(ModelError::Factor(_))
-            | RunError::Solve(_)
+            | RunError::Step(_)
+            | RunError::Check(_)
+            | RunError::ZoneKeptGrowing { .. }
             | RunError::ZoneClipped { .. } => 3,
             RunError::Write { .. } => 4,
             RunError::EquilibriumLost { .. } => 5,

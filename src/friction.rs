@@ -55,6 +55,12 @@ pub enum FrictionError {
     /// The slip length is negative.
     #[error("slip length delta must be non-negative, got {delta}")]
     NegativeDelta { delta: f64 },
+    /// A shape name that is not one of the parametric shapes.
+    #[error("shape `{name}` is not one of ramp, step, exponential")]
+    UnknownShape { name: String },
+    /// A parameter that must be positive (Λ, radius, load of a Λ-given law).
+    #[error("`{name}` = {value} must be > 0")]
+    NotPositive { name: &'static str, value: f64 },
     /// A table needs at least two rows.
     #[error("friction table needs at least 2 rows, got {rows}")]
     TooFewRows { rows: usize },

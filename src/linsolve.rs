@@ -10,11 +10,16 @@ use faer::{MatMut, Side};
 pub enum FactorError {
     #[error(
         "the stiffness matrix is not positive definite: a body is not held (add a support or a \
-         pilot, or check that every body is connected to one) ({0})"
+         pilot, or check that every body is connected to one) (pivot {pivot} of {n} in the \
+         elimination order is not positive)"
     )]
-    NotPositiveDefinite(String),
-    #[error("sparse factorisation failed: {0}")]
-    Other(String),
+    NotPositiveDefinite { pivot: usize, n: usize },
+    #[error("sparse factorisation: not enough memory for {what} of a matrix of order {n}")]
+    OutOfMemory { what: &'static str, n: usize },
+    #[error("sparse factorisation: an index of a matrix of order {n} overflows")]
+    IndexOverflow { n: usize },
+    #[error("sparse factorisation: the symbolic analysis is not supernodal")]
+    NotSupernodal,
 }
 
 fn sym<'a>(
@@ -62,7 +67,13 @@ impl PartialSymbolic {
     ) -> Result<PartialSymbolic, FactorError> {
         use faer::dyn_stack::{MemBuffer, MemStack};
         use faer::sparse::linalg::{SupernodalThreshold, amd, cholesky};
-        let other = |e: faer::sparse::FaerError| FactorError::Other(format!("{e:?}"));
+        let other = |e: faer::sparse::FaerError| match e {
+            faer::sparse::FaerError::IndexOverflow => FactorError::IndexOverflow { n },
+            _ => FactorError::OutOfMemory {
+                what: "the symbolic analysis",
+                n,
+            },
+        };
         let n_i = n - n_r;
         // AMD on the interior block (its leading columns are a valid upper CSC matrix).
         let mut fwd = vec![0usize; n];
@@ -73,7 +84,10 @@ impl PartialSymbolic {
                 n_i,
                 col_ptr[n_i],
             ))
-            .map_err(|_| FactorError::Other("out of memory".into()))?;
+            .map_err(|_| FactorError::OutOfMemory {
+                what: "the ordering",
+                n,
+            })?;
             amd::order_maybe_unsorted(
                 &mut fwd[..n_i],
                 &mut inv[..n_i],
@@ -124,7 +138,10 @@ impl PartialSymbolic {
             self.inner
                 .factorize_numeric_llt_scratch::<f64>(par, Default::default()),
         )
-        .map_err(|_| FactorError::Other("out of memory".into()))?;
+        .map_err(|_| FactorError::OutOfMemory {
+            what: "the numeric factorisation",
+            n,
+        })?;
         self.inner
             .factorize_numeric_llt(
                 &mut l,
@@ -135,13 +152,15 @@ impl PartialSymbolic {
                 MemStack::new(&mut mem),
                 Default::default(),
             )
-            .map_err(|e| FactorError::NotPositiveDefinite(format!("{e:?}")))?;
+            .map_err(|e| match e {
+                faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
+                    FactorError::NotPositiveDefinite { pivot: index, n }
+                }
+            })?;
         let mut l_rr = faer::Mat::<f64>::zeros(n_r, n_r);
         if n_r > 0 {
             let SymbolicCholeskyRaw::Supernodal(sn) = self.inner.raw() else {
-                return Err(FactorError::Other(
-                    "expected a supernodal factorisation".into(),
-                ));
+                return Err(FactorError::NotSupernodal);
             };
             let lref = SupernodalLltRef::new(sn, &l);
             for s in 0..sn.n_supernodes() {

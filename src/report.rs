@@ -5,6 +5,7 @@
 use crate::case::Case;
 use crate::contact::solver::State;
 use crate::driver::Simulation;
+use crate::error::{CheckFailure, RunError};
 use crate::model::Model;
 use crate::model::step::{ContactFigures, PilotState};
 use serde::Serialize;
@@ -123,15 +124,15 @@ pub(crate) fn final_checks(
 }
 
 /// The failure an error-level check makes of a run that otherwise completed.
-pub(crate) fn failed_check(checks: &[crate::checks::Check]) -> Option<String> {
+fn failed_check(checks: &[crate::checks::Check]) -> Option<CheckFailure> {
     checks
         .iter()
         .find(|c| c.level == crate::checks::Level::Error)
-        .map(|c| {
-            format!(
-                "the last step: check `{}` failed ({:.3e} against {:.3e}): {}",
-                c.name, c.value, c.limit, c.note
-            )
+        .map(|c| CheckFailure {
+            name: c.name.to_string(),
+            value: c.value,
+            limit: c.limit,
+            note: c.note.to_string(),
         })
 }
 
@@ -370,10 +371,10 @@ pub fn summarise(
     case_path: &Path,
     out_dir: &Path,
     sim: Simulation,
-) -> (Summary, Option<String>, Option<(f64, f64)>) {
+) -> (Summary, Option<RunError>, Option<(f64, f64)>) {
     let Simulation {
         records,
-        mut failure,
+        failure,
         lost_equilibrium,
         newton_iterations,
         lu_factorisations,
@@ -403,21 +404,10 @@ pub fn summarise(
         &records,
         friction.as_ref(),
     );
-    if failure.is_none() {
-        failure = failed_check(&checks);
-    }
+    let (failure, status) = judge(failure, lost_equilibrium, friction.as_ref(), &checks);
     let status = match (&failure, lost_equilibrium) {
-        (None, _) => "completed".into(),
-        (Some(_), Some((q, qf))) => {
-            // Below f_d P the contact can carry the load: a local peak, not gross sliding.
-            match friction.as_ref().and_then(|f| f.local_peak(q)) {
-                None => format!("equilibrium lost: Q_max = {q:.6} (no equilibrium at {qf:.6})"),
-                Some(fdp) => format!(
-                    "equilibrium lost at a local peak (not gross sliding: Q_max < f_d P = {fdp:.6}): Q_max = {q:.6} (no equilibrium at {qf:.6})"
-                ),
-            }
-        }
-        (Some(m), None) => format!("failed at {m}; the output holds the steps before it"),
+        (Some(_), None) => format!("{status}; the output holds the steps before it"),
+        _ => status,
     };
     let summary = Summary {
         case: case_path.display().to_string(),
@@ -445,6 +435,35 @@ pub fn summarise(
         status,
     };
     (summary, failure, lost_equilibrium)
+}
+
+/// How a run (or a sweep row) ended: the error that stopped it, if any (a failed step, else an
+/// error-level check of the last step), and its status line: `completed`, `equilibrium lost …`
+/// with Q_max and the load that found no equilibrium, or `failed at …`.
+pub fn judge(
+    failure: Option<crate::error::StepFailure>,
+    lost_equilibrium: Option<(f64, f64)>,
+    friction: Option<&FrictionSummary>,
+    checks: &[crate::checks::Check],
+) -> (Option<RunError>, String) {
+    let failure: Option<RunError> = match failure {
+        Some(f) => Some(f.into()),
+        None => failed_check(checks).map(Into::into),
+    };
+    let status = match (&failure, lost_equilibrium) {
+        (None, _) => "completed".into(),
+        (Some(_), Some((q, qf))) => {
+            // Below f_d P the contact can carry the load: a local peak, not gross sliding.
+            match friction.and_then(|f| f.local_peak(q)) {
+                None => format!("equilibrium lost: Q_max = {q:.6} (no equilibrium at {qf:.6})"),
+                Some(fdp) => format!(
+                    "equilibrium lost at a local peak (not gross sliding: Q_max < f_d P = {fdp:.6}): Q_max = {q:.6} (no equilibrium at {qf:.6})"
+                ),
+            }
+        }
+        (Some(m), None) => format!("failed at {m}"),
+    };
+    (failure, status)
 }
 
 /// Prints the warnings of a summary (`show`: the log level lets warnings through): an

@@ -50,8 +50,8 @@ pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
                     .unwrap_or("case".into()),
             )
         });
-    let mut gap = None;
-    for _ in 0..8 {
+    let (mut gap, doublings) = (None, 8);
+    for _ in 0..doublings {
         let model = Model::build_with_gap(&case, case_path, gap)?;
         match run_model(&case, case_path, model, &out_dir, opts) {
             Err(RunError::ZoneClipped { gap: g, step }) => {
@@ -65,9 +65,10 @@ pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
             other => return other,
         }
     }
-    Err(RunError::Solve(
-        "the contact zone kept growing: check the loads and the candidate gap".into(),
-    ))
+    Err(RunError::ZoneKeptGrowing {
+        gap: gap.unwrap_or(f64::NAN),
+        doublings,
+    })
 }
 
 /// How many of the case's nominal load steps the load path has covered at `time` (stage index
@@ -156,8 +157,8 @@ pub fn run_model(
             local_peak,
         });
     }
-    if let Some(m) = failure {
-        return Err(RunError::Solve(m));
+    if let Some(e) = failure {
+        return Err(e);
     }
     Ok(summary)
 }

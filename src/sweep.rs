@@ -3,7 +3,7 @@
 use crate::case::{Case, FrictionSpec, Stage};
 use crate::model::Model;
 use crate::output;
-use crate::report::{FrictionSummary, failed_check, final_checks, friction_summary};
+use crate::report::{FrictionSummary, final_checks, friction_summary, judge};
 use crate::run::{LogLevel, simulate};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -224,23 +224,8 @@ pub fn sweep(
                         &sim.records,
                         friction.as_ref(),
                     );
-                    if sim.failure.is_none() {
-                        sim.failure = failed_check(&checks);
-                    }
-                    let status = match (&sim.failure, sim.lost_equilibrium) {
-                        (None, _) => "completed".to_string(),
-                        (Some(_), Some((q, qf))) => {
-                            match friction.as_ref().and_then(|f| f.local_peak(q)) {
-                                None => {
-                                    format!("equilibrium lost: Q_max = {q:.6} (none at {qf:.6})")
-                                }
-                                Some(fdp) => format!(
-                                    "equilibrium lost at a local peak (Q_max < f_d P = {fdp:.6}): Q_max = {q:.6} (none at {qf:.6})"
-                                ),
-                            }
-                        }
-                        (Some(m), None) => format!("failed: {m}"),
-                    };
+                    let (_, status) =
+                        judge(sim.failure, sim.lost_equilibrium, friction.as_ref(), &checks);
                     SweepRow {
                         index,
                         load_index,

@@ -368,7 +368,7 @@ fn run_level(level: usize) -> Level {
                 Some((q, _)) => format!(
                     "stopped at Q = {q:.4} N/mm (`equilibrium lost` from the CLI, exit status 5)"
                 ),
-                None => why.clone(),
+                None => why.to_string(),
             };
             (f64::NAN, f64::NAN, f64::NAN, f64::NAN, status)
         }

@@ -7,7 +7,7 @@ mod unheld;
 
 use crate::case::{Case, Control, Stage};
 use crate::contact::solver::{self, State, Status};
-use crate::error::RunError;
+use crate::error::{RunError, StepError, StepFailure};
 use crate::friction::FrictionLaw;
 use crate::model::Model;
 use crate::model::StepLoad;
@@ -48,7 +48,7 @@ pub struct StepEvent<'a> {
 pub struct Simulation {
     pub records: Vec<StepRecord>,
     /// Why the run stopped early, if it did.
-    pub failure: Option<String>,
+    pub failure: Option<StepFailure>,
     /// (Q_max, the load at which no equilibrium was found) when a force-controlled tangential
     /// load passed the peak.
     pub lost_equilibrium: Option<(f64, f64)>,
@@ -166,9 +166,9 @@ impl StageStart {
 /// Why a step attempt gave no converged state.
 enum Attempt {
     /// The solve failed or its answer means nothing: cut the increment back.
-    Retry(String),
+    Retry(StepError),
     /// Nothing to retry (a run without contact whose solve failed).
-    Stop(String),
+    Stop(StepError),
     /// The run cannot go on as set up (the contact reached the rim of its candidate zone).
     Fatal(RunError),
 }
@@ -189,7 +189,7 @@ struct Driver<'a> {
     t_solve: f64,
     t_contact: f64,
     newton_total: usize,
-    failure: Option<String>,
+    failure: Option<StepFailure>,
     /// The last converged tangential force and the first that failed, while cutbacks bisect.
     bracket: Option<(f64, f64)>,
     lost_equilibrium: Option<(f64, f64)>,
@@ -228,8 +228,7 @@ impl Driver<'_> {
             let ctl = start.control_at(target, a_new);
             let step = self.records.len() + 1;
             if let Some(why) = unheld_before(self.model, self.case, &ctl) {
-                self.failure = Some(format!("step {step}: {why}"));
-                return Ok(false);
+                return Ok(self.stop(step, why, None));
             }
             let attempt = match self.cstate.take() {
                 Some(prev) => {
@@ -254,10 +253,7 @@ impl Driver<'_> {
             let (u, p, iterations) = match attempt {
                 Ok(c) => c,
                 Err(Attempt::Fatal(e)) => return Err(e),
-                Err(Attempt::Stop(m)) => {
-                    self.failure = Some(format!("step {step}: {m}"));
-                    return Ok(false);
-                }
+                Err(Attempt::Stop(why)) => return Ok(self.stop(step, why, None)),
                 Err(Attempt::Retry(e)) => {
                     // Failed attempts count in the solve time too (they can dominate a run
                     // that brackets Q_max).
@@ -273,14 +269,12 @@ impl Driver<'_> {
                         }
                         continue;
                     }
-                    self.failure = Some(format!("step {step}: {e} (after {MAX_CUTBACKS} cutbacks)"));
                     self.lost_equilibrium = self.bracket;
-                    return Ok(false);
+                    return Ok(self.stop(step, e, Some(MAX_CUTBACKS)));
                 }
             };
             if !self.finite(u.as_ref()) {
-                self.failure = Some(format!("step {step}: the solution is not finite"));
-                return Ok(false);
+                return Ok(self.stop(step, StepError::NotFinite, None));
             }
             alpha = a_new;
             self.control = ctl;
@@ -356,7 +350,7 @@ impl Driver<'_> {
             )
         };
         self.t_contact += tc.elapsed().as_secs_f64();
-        let out = res.map_err(|e| Attempt::Retry(e.to_string()))?;
+        let out = res.map_err(|e| Attempt::Retry(e.into()))?;
         // Clipping: contact on the rim of the candidate zone.
         let cm = self.model.contact.as_ref().expect("contact");
         let rim = cm
@@ -399,6 +393,16 @@ impl Driver<'_> {
         {
             self.bracket = Some((self.pilot.fx, f));
         }
+    }
+
+    /// Records why the run stops at `step`; returns `false` (the stage loop's "stop").
+    fn stop(&mut self, step: usize, cause: StepError, cutbacks: Option<usize>) -> bool {
+        self.failure = Some(StepFailure {
+            step,
+            cause,
+            cutbacks,
+        });
+        false
     }
 
     fn finite(&self, u: Option<&Vec<f64>>) -> bool {

@@ -3,6 +3,7 @@
 
 use crate::case::{Case, Control};
 use crate::contact::solver::{State, Status};
+use crate::error::StepError;
 use crate::model::Model;
 
 /// The pilot's drive along the direction that separates its (otherwise unheld) body from the
@@ -19,43 +20,42 @@ fn separating_force(model: &Model, ctl: &[Control; 2]) -> Option<(usize, usize, 
 
 /// A step that cannot have an equilibrium: the pilot pulls a body that nothing else holds away
 /// from the contact (a force along the separating direction).
-pub(super) fn unheld_before(model: &Model, case: &Case, ctl: &[Control; 2]) -> Option<String> {
+pub(super) fn unheld_before(model: &Model, case: &Case, ctl: &[Control; 2]) -> Option<StepError> {
     let (body, k, f) = separating_force(model, ctl)?;
     let f = f.filter(|f| *f > 0.0)?;
-    Some(format!(
-        "the pilot's force pilot_{} = {:e} pulls `{}` away from the contact, and nothing else \
-         holds that body (no support): no equilibrium exists; press the bodies together or \
-         control the pilot by displacement",
-        ["x", "y"][k],
-        f * model.pilot_separation.expect("checked").1[k].signum(),
-        case.bodies[body].group
-    ))
+    Some(StepError::PulledApart {
+        axis: ["x", "y"][k],
+        force: f * model.pilot_separation.expect("checked").1[k].signum(),
+        body: case.bodies[body].group.clone(),
+    })
 }
 
 /// A converged step whose answer means nothing: a force-controlled pilot body with no node in
 /// contact and no support (held only by the solver's grounding spring), or a pilot that ran
 /// away (see [`crate::checks::DISPLACEMENT_ERROR`]).
-pub(super) fn unheld_after(model: &Model, case: &Case, ctl: &[Control; 2], st: &State) -> Option<String> {
+pub(super) fn unheld_after(
+    model: &Model,
+    case: &Case,
+    ctl: &[Control; 2],
+    st: &State,
+) -> Option<StepError> {
     let size = model.mesh.diameter();
     let u = st.pilot_u[0].hypot(st.pilot_u[1]);
     let limit = crate::checks::DISPLACEMENT_ERROR;
     if model.dofs.pilot.is_some() && (u.is_nan() || u > limit * size) {
-        return Some(format!(
-            "the pilot moved {u:e}, more than {limit} times the model's size {size:e}: a body is \
-             not held (check the supports and that the loads press the bodies together)"
-        ));
+        return Some(StepError::RanAway {
+            moved: u,
+            limit,
+            size,
+        });
     }
     let (body, k, f) = separating_force(model, ctl)?;
     f?;
     if st.status.iter().all(|s| *s == Status::Open) {
-        return Some(format!(
-            "no node is in contact and nothing else holds `{}` along {} (no support, pilot_{} \
-             force-controlled): the body is free; press the bodies together or control the pilot \
-             by displacement",
-            case.bodies[body].group,
-            ["x", "y"][k],
-            ["x", "y"][k]
-        ));
+        return Some(StepError::Free {
+            body: case.bodies[body].group.clone(),
+            axis: ["x", "y"][k],
+        });
     }
     None
 }

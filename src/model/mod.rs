@@ -38,8 +38,8 @@ pub enum ModelError {
         path: String,
         source: crate::contact::PairError,
     },
-    #[error("{0}")]
-    Unsupported(String),
+    #[error("contact.friction: {0}")]
+    Friction(#[from] crate::friction::FrictionError),
 }
 
 /// Wall time of each phase, seconds.
@@ -335,7 +335,7 @@ impl Model {
                 .as_ref()
                 .map(|f| f.resolve(es))
                 .transpose()
-                .map_err(ModelError::Unsupported)?,
+                .map_err(ModelError::Friction)?,
             _ => None,
         };
         let contact_w0 = match &contact {

@@ -3,6 +3,7 @@
 //! displacement field of a contact state, and the contact figures (a, c, b, forces) of a state.
 
 use crate::case::Control;
+use crate::error::StepError;
 use crate::contact::solver::{self, ContactError, PilotDrive, State, Status};
 use crate::model::Model;
 use serde::Serialize;
@@ -53,7 +54,7 @@ impl Model {
         &self,
         scale: f64,
         control: [Control; 2],
-    ) -> Result<(Vec<f64>, Option<PilotState>), String> {
+    ) -> Result<(Vec<f64>, Option<PilotState>), StepError> {
         let f = self.load(scale);
         let cond = &self.condensed;
         if self.dofs.pilot.is_none() {
@@ -216,7 +217,7 @@ pub fn solve_pilot(
     g: &[f64],
     control: [Control; 2],
     scale: f64,
-) -> Result<([f64; 2], [f64; 2]), String> {
+) -> Result<([f64; 2], [f64; 2]), StepError> {
     let mut u = [0.0; 2];
     let mut r = [0.0; 2];
     let mut free = Vec::new();
@@ -228,7 +229,7 @@ pub fn solve_pilot(
             }
             Control::Displacement(d) => u[c] = d,
             Control::Slip(_) => {
-                return Err("slip control needs frictional contact".into());
+                return Err(StepError::SlipWithoutFriction);
             }
         }
     }
@@ -247,14 +248,14 @@ pub fn solve_pilot(
         1 => {
             let i = free[0];
             if s[i * 2 + i].abs() <= 1e-10 * scale {
-                return Err(singular());
+                return Err(StepError::PilotUnheld);
             }
             u[i] = rhs[0] / s[i * 2 + i];
         }
         2 => {
             let det = s[0] * s[3] - s[1] * s[2];
             if s[0].abs().min(s[3].abs()) <= 1e-10 * scale || det.abs() <= 1e-10 * scale * scale {
-                return Err(singular());
+                return Err(StepError::PilotUnheld);
             }
             u[0] = (s[3] * rhs[0] - s[1] * rhs[1]) / det;
             u[1] = (s[0] * rhs[1] - s[2] * rhs[0]) / det;
@@ -265,10 +266,4 @@ pub fn solve_pilot(
         r[i] = s[i * 2] * u[0] + s[i * 2 + 1] * u[1] - g[i];
     }
     Ok((u, r))
-}
-
-fn singular() -> String {
-    "the pilot is force-controlled but the body it drives is not held in that direction \
-     (no support and no contact): control it by displacement instead"
-        .into()
 }
