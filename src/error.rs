@@ -95,22 +95,104 @@ pub enum RunError {
     },
 }
 
+/// Why a sweep (or the merge of its parts) stopped; nothing is written for input errors.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    #[error(transparent)]
+    Case(#[from] crate::case::CaseError),
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    #[error("{path}: cannot read: {source}")]
+    Read {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("{path}: {source}")]
+    Parse {
+        path: String,
+        source: serde_json::Error,
+    },
+    #[error("{path}: {}{why}", if key.is_empty() { String::new() } else { format!("`{key}` ") })]
+    Input {
+        path: String,
+        key: String,
+        why: String,
+    },
+    #[error("--shard {spec}: {why}")]
+    Shard { spec: String, why: String },
+    #[error(
+        "{path} belongs to another sweep (sweep id {found}, this one {expected}: the case, its \
+         mesh, the sweep file or the program changed); use another --out, or --fresh to \
+         discard it"
+    )]
+    ForeignPart {
+        path: String,
+        found: String,
+        expected: String,
+    },
+    #[error("{path}: not a sweep part ({why})")]
+    BadPart { path: String, why: String },
+    #[error(
+        "the parts are of different sweeps: {first} has sweep id {a}, {second} has {b}; merge \
+         parts of one case and sweep file only"
+    )]
+    Mismatch {
+        first: String,
+        second: String,
+        a: String,
+        b: String,
+    },
+    #[error("no sweep parts (part_K_of_N.jsonl) in {dirs}")]
+    NoParts { dirs: String },
+    #[error(
+        "{} of {total} rows are missing (rows {}{}): run the shards that hold them (row r is \
+         in shard r mod N) and merge again; nothing was written",
+        missing.len(),
+        missing.iter().take(10).map(|r| r.to_string()).collect::<Vec<_>>().join(", "),
+        if missing.len() > 10 { ", …" } else { "" }
+    )]
+    Missing { missing: Vec<usize>, total: usize },
+    #[error("cannot write output `{path}`: {source}")]
+    Write {
+        path: String,
+        source: std::io::Error,
+    },
+}
+
+impl SweepError {
+    /// Process exit status, as for a run: 2 bad input, 3 a failure to compute (or rows still
+    /// missing), 4 output errors.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            SweepError::Model(e) => model_exit_code(e),
+            SweepError::Missing { .. } => 3,
+            SweepError::Write { .. } => 4,
+            _ => 2,
+        }
+    }
+}
+
+/// Exit status of a model that could not be built: 2 for bad input, 3 for a factorisation.
+fn model_exit_code(e: &ModelError) -> i32 {
+    match e {
+        ModelError::MeshRead(_)
+        | ModelError::MeshCheck(_)
+        | ModelError::Dof { .. }
+        | ModelError::Edge { .. }
+        | ModelError::Contact { .. }
+        | ModelError::Friction(_) => 2,
+        ModelError::Factor(_) => 3,
+    }
+}
+
 impl RunError {
     /// Process exit status: 2 for bad input, 3 for a solver failure, 4 for output errors, 5 when
     /// a force-controlled tangential load passes the largest load the contact can carry.
     pub fn exit_code(&self) -> i32 {
         match self {
-            RunError::Case(_)
-            | RunError::Model(
-                ModelError::MeshRead(_)
-                | ModelError::MeshCheck(_)
-                | ModelError::Dof { .. }
-                | ModelError::Edge { .. }
-                | ModelError::Contact { .. }
-                | ModelError::Friction(_),
-            ) => 2,
-            RunError::Model(ModelError::Factor(_))
-            | RunError::Step(_)
+            RunError::Case(_) => 2,
+            RunError::Model(e) => model_exit_code(e),
+            RunError::Step(_)
             | RunError::Check(_)
             | RunError::ZoneKeptGrowing { .. }
             | RunError::ZoneClipped { .. } => 3,

@@ -52,6 +52,24 @@ enum Cmd {
         threads: Option<usize>,
         #[arg(long)]
         quiet: bool,
+        /// Run shard K of N only (rows r with r mod N = K, K from 0), appending them to
+        /// OUT/part_K_of_N.jsonl; `slurm/N` takes K from SLURM_ARRAY_TASK_ID. A shard started
+        /// again skips the rows its part already holds. Merge with `stickslip sweep-merge`.
+        #[arg(long)]
+        shard: Option<String>,
+        /// Discard this shard's existing part instead of resuming it.
+        #[arg(long)]
+        fresh: bool,
+    },
+    /// Merge the parts of a sharded sweep (part_K_of_N.jsonl in each DIR) into sweep.csv and
+    /// sweep.json; refuses parts of different sweeps and reports rows no part holds.
+    SweepMerge {
+        /// Directories holding parts (or part files).
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Where to write the table (default: the first directory).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// The paper's closed forms: scalars as JSON, curves as CSV.
     Analytic(stickslip::analytic::cli::AnalyticArgs),
@@ -115,16 +133,43 @@ fn main() -> ExitCode {
             out,
             threads,
             quiet,
+            shard,
+            fresh,
         } => {
             if let Err(e) = set_threads(threads) {
                 eprintln!("error: {e}");
                 return ExitCode::from(2);
             }
-            match stickslip::sweep::run(&case, &sweep, out, quiet) {
+            let res = shard
+                .as_deref()
+                .map(stickslip::sweep::parse_shard)
+                .transpose()
+                .and_then(|shard| {
+                    let opts = stickslip::sweep::SweepOptions {
+                        out,
+                        quiet,
+                        shard,
+                        fresh,
+                    };
+                    stickslip::sweep::run(&case, &sweep, &opts)
+                });
+            match res {
                 Ok(()) => ExitCode::SUCCESS,
-                Err((code, e)) => {
+                Err(e) => {
                     eprintln!("error: {e}");
-                    ExitCode::from(code)
+                    ExitCode::from(e.exit_code() as u8)
+                }
+            }
+        }
+        Cmd::SweepMerge { dirs, out } => {
+            match stickslip::sweep::parts::merge(&dirs, out.as_deref()) {
+                Ok(dir) => {
+                    eprintln!("table in {}", dir.join("sweep.csv").display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(e.exit_code() as u8)
                 }
             }
         }
