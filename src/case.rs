@@ -32,7 +32,11 @@ pub struct Case {
     /// Contact between two curve groups (frictionless unless `friction` is given).
     #[serde(default)]
     pub contact: Option<ContactSpec>,
-    /// Load stages, applied in order; each ramps linearly from the end of the previous one.
+    /// Load stages, applied in order; each ramps linearly from the end of the previous one. An
+    /// item may also be a group repeated `count` times, `{"cycles": {"count": N, "stages":
+    /// [stage, …]}}` (fretting): it expands in place, each stage remembering its cycle.
+    #[serde(deserialize_with = "deserialize_stages")]
+    #[schemars(with = "Vec<StageItem>")]
     pub stages: Vec<Stage>,
     /// What to write.
     #[serde(default)]
@@ -117,10 +121,22 @@ pub struct ContactSpec {
 ///   (shape optional, default ramp; Δ in mm);
 /// * a shaped law with Δ through the paper's Λ = R Δ/((f_s − f_d) a²):
 ///   `{"shape": "ramp", "fs", "fd", "lambda", "radius", "load"}` where `radius` is the effective
-///   radius R and `load` the normal load P that set `a = sqrt(4PR/(πE*))` (E* of the pair).
+///   radius R and `load` the normal load P that set `a = sqrt(4PR/(πE*))` (E* of the pair);
+///
+/// each with an optional `"history": "accumulated" | "since_stick"` (see
+/// [`crate::friction::History`]).
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct FrictionSpec {
+    #[serde(flatten)]
+    pub kind: FrictionKind,
+    #[serde(skip_serializing_if = "crate::friction::History::is_accumulated")]
+    pub history: crate::friction::History,
+}
+
+/// The law part of a [`FrictionSpec`].
 #[derive(Clone, Debug, Serialize, PartialEq)]
 #[serde(untagged)]
-pub enum FrictionSpec {
+pub enum FrictionKind {
     Law(crate::friction::FrictionLaw),
     Preset {
         preset: String,
@@ -139,34 +155,52 @@ pub enum FrictionSpec {
 impl<'de> Deserialize<'de> for FrictionSpec {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         use serde::de::Error;
-        let v = serde_json::Value::deserialize(d)?;
+        let mut v = serde_json::Value::deserialize(d)?;
+        let history = match v.as_object_mut().and_then(|o| o.remove("history")) {
+            None => crate::friction::History::Accumulated,
+            Some(h) => serde_json::from_value(h.clone()).map_err(|_| {
+                D::Error::custom(format!(
+                    "friction: `history` = {h} is not one of \"accumulated\", \"since_stick\""
+                ))
+            })?,
+        };
+        let kind = FrictionKind::from_value(v).map_err(D::Error::custom)?;
+        Ok(FrictionSpec { kind, history })
+    }
+}
+
+impl FrictionKind {
+    fn from_value(v: serde_json::Value) -> Result<Self, String> {
+        fn err(s: impl std::fmt::Display) -> String {
+            s.to_string()
+        }
         let obj = v
             .as_object()
-            .ok_or_else(|| D::Error::custom("a friction law must be an object"))?;
-        let num = |k: &str| -> Result<f64, D::Error> {
+            .ok_or_else(|| err("a friction law must be an object"))?;
+        let num = |k: &str| -> Result<f64, String> {
             obj.get(k)
                 .and_then(|x| x.as_f64())
-                .ok_or_else(|| D::Error::custom(format!("friction: `{k}` (a number) is required")))
+                .ok_or_else(|| err(format!("friction: `{k}` (a number) is required")))
         };
         if let Some(p) = obj.get("preset") {
             for k in obj.keys() {
                 if k != "preset" && k != "shape" {
-                    return Err(D::Error::custom(format!(
+                    return Err(err(format!(
                         "friction: unknown field `{k}` with `preset` (expected `shape`)"
                     )));
                 }
             }
             let preset = p
                 .as_str()
-                .ok_or_else(|| D::Error::custom("friction: `preset` must be a name"))?
+                .ok_or_else(|| err("friction: `preset` must be a name"))?
                 .to_string();
             let shape = obj.get("shape").and_then(|x| x.as_str()).map(String::from);
-            return Ok(FrictionSpec::Preset { preset, shape });
+            return Ok(FrictionKind::Preset { preset, shape });
         }
         if obj.contains_key("lambda") {
             for k in obj.keys() {
                 if !["shape", "fs", "fd", "lambda", "radius", "load"].contains(&k.as_str()) {
-                    return Err(D::Error::custom(format!(
+                    return Err(err(format!(
                         "friction: unknown field `{k}` with `lambda` (expected shape, fs, fd, lambda, radius, load)"
                     )));
                 }
@@ -174,9 +208,9 @@ impl<'de> Deserialize<'de> for FrictionSpec {
             let shape = obj
                 .get("shape")
                 .and_then(|x| x.as_str())
-                .ok_or_else(|| D::Error::custom("friction: `shape` is required"))?
+                .ok_or_else(|| err("friction: `shape` is required"))?
                 .to_string();
-            return Ok(FrictionSpec::Lambda {
+            return Ok(FrictionKind::Lambda {
                 shape,
                 fs: num("fs")?,
                 fd: num("fd")?,
@@ -186,8 +220,8 @@ impl<'de> Deserialize<'de> for FrictionSpec {
             });
         }
         serde_json::from_value::<crate::friction::FrictionLaw>(v)
-            .map(FrictionSpec::Law)
-            .map_err(|e| D::Error::custom(format!("friction: {e}")))
+            .map(FrictionKind::Law)
+            .map_err(|e| err(format!("friction: {e}")))
     }
 }
 
@@ -206,12 +240,12 @@ impl FrictionSpec {
                 name: other.to_string(),
             }),
         };
-        match self {
-            FrictionSpec::Law(l) => Ok(l.clone()),
-            FrictionSpec::Preset { preset, shape: s } => {
+        match &self.kind {
+            FrictionKind::Law(l) => Ok(l.clone()),
+            FrictionKind::Preset { preset, shape: s } => {
                 FrictionLaw::preset_shaped(preset, shape(s.as_deref().unwrap_or("ramp"))?)
             }
-            FrictionSpec::Lambda {
+            FrictionKind::Lambda {
                 shape: s,
                 fs,
                 fd,
@@ -289,10 +323,85 @@ pub enum TractionKind {
     Hertz,
 }
 
+/// An item of the `stages` list: a stage, or a group of stages repeated (for the schema; the
+/// list is read by [`deserialize_stages`]).
+#[derive(schemars::JsonSchema)]
+#[allow(dead_code)]
+#[serde(untagged)]
+enum StageItem {
+    Stage(Stage),
+    Cycles {
+        /// A group of stages repeated `count` times.
+        cycles: CycleGroup,
+    },
+}
+
+/// A group of stages repeated `count` times (`count` ≥ 1, at least one stage, no nesting).
+#[derive(Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+struct CycleGroup {
+    count: usize,
+    stages: Vec<Stage>,
+}
+
+/// Reads the `stages` list, expanding cycle groups in place; a stage of cycle `k` (from 1)
+/// carries `cycle = k`.
+fn deserialize_stages<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<Stage>, D::Error> {
+    use serde::de::Error;
+    let items = Vec::<serde_json::Value>::deserialize(d)?;
+    let mut out = Vec::new();
+    for (i, item) in items.into_iter().enumerate() {
+        let group = item.as_object().and_then(|o| o.get("cycles")).cloned();
+        match group {
+            None => out.push(serde_json::from_value::<Stage>(item).map_err(|e| {
+                D::Error::custom(format!("stages[{i}]: {e}"))
+            })?),
+            Some(g) => {
+                if item.as_object().is_some_and(|o| o.len() > 1) {
+                    return Err(D::Error::custom(format!(
+                        "stages[{i}]: a cycle group is `{{\"cycles\": {{\"count\": N, \"stages\": [...]}}}}` with nothing beside `cycles`"
+                    )));
+                }
+                if g.get("stages")
+                    .and_then(|s| s.as_array())
+                    .is_some_and(|s| s.iter().any(|x| x.get("cycles").is_some()))
+                {
+                    return Err(D::Error::custom(format!(
+                        "stages[{i}].cycles.stages: cycle groups do not nest"
+                    )));
+                }
+                let g: CycleGroup = serde_json::from_value(g)
+                    .map_err(|e| D::Error::custom(format!("stages[{i}].cycles: {e}")))?;
+                if g.count == 0 {
+                    return Err(D::Error::custom(format!(
+                        "stages[{i}].cycles.count must be at least 1"
+                    )));
+                }
+                if g.stages.is_empty() {
+                    return Err(D::Error::custom(format!(
+                        "stages[{i}].cycles.stages is empty: a cycle needs at least one stage"
+                    )));
+                }
+                for k in 1..=g.count {
+                    out.extend(g.stages.iter().cloned().map(|mut s| {
+                        s.cycle = Some(k);
+                        s
+                    }));
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
 /// A load stage.
 #[derive(Clone, Debug, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Stage {
+    /// The cycle (from 1) of a stage expanded from a cycle group; none otherwise.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub cycle: Option<usize>,
     #[serde(default)]
     pub name: String,
     /// Number of load steps (≥ 1).
@@ -321,6 +430,12 @@ pub struct Output {
     /// Write every n-th step (the last step is always written).
     #[serde(default = "one")]
     pub every: usize,
+    /// Keep the energy balance of every step (`energy.csv`, `summary.json`'s `energy`): the
+    /// work of the pilot, tractions and supports, the elastic energy and the frictional
+    /// dissipation. Default: on for cases with a cycle group, off otherwise (it recovers the
+    /// whole displacement field at every step).
+    #[serde(default)]
+    pub energy: Option<bool>,
 }
 
 fn yes() -> bool {
@@ -336,6 +451,7 @@ impl Default for Output {
             dir: None,
             vtu: true,
             every: 1,
+            energy: None,
         }
     }
 }
@@ -597,6 +713,13 @@ impl Case {
         Ok(())
     }
 
+    /// Whether the run keeps its energy balance (see [`Output::energy`]).
+    pub fn tracks_energy(&self) -> bool {
+        self.output
+            .energy
+            .unwrap_or_else(|| self.stages.iter().any(|s| s.cycle.is_some()))
+    }
+
     /// Total number of load steps.
     pub fn total_steps(&self) -> usize {
         self.stages.iter().map(|s| s.steps).sum()
@@ -611,20 +734,23 @@ impl schemars::JsonSchema for FrictionSpec {
     fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
         let num = serde_json::json!({"type": "number"});
         let shaped = serde_json::json!({"enum": ["ramp", "step", "exponential"]});
+        let history = serde_json::json!({"enum": ["accumulated", "since_stick"],
+            "description": "Which slip μ is a function of: the total slip path (default), or the slip since the node last stuck (healing)."});
         schemars::json_schema!({
             "description": "A friction law of the accumulated slip: a law, a preset of the paper's Table 1, or a shaped law with Δ from Λ.",
             "oneOf": [
                 {"type": "object", "additionalProperties": false, "required": ["shape", "mu"],
-                 "properties": {"shape": {"const": "constant"}, "mu": num}},
+                 "properties": {"shape": {"const": "constant"}, "mu": num, "history": history}},
                 {"type": "object", "additionalProperties": false, "required": ["shape", "fs", "fd", "delta"],
-                 "properties": {"shape": shaped, "fs": num, "fd": num, "delta": num}},
+                 "properties": {"shape": shaped, "fs": num, "fd": num, "delta": num, "history": history}},
                 {"type": "object", "additionalProperties": false, "required": ["shape", "rows"],
                  "properties": {"shape": {"const": "table"},
-                                "rows": {"type": "array", "minItems": 2, "items": {"type": "array", "items": num, "minItems": 2, "maxItems": 2}}}},
+                                "rows": {"type": "array", "minItems": 2, "items": {"type": "array", "items": num, "minItems": 2, "maxItems": 2}},
+                                "history": history}},
                 {"type": "object", "additionalProperties": false, "required": ["preset"],
-                 "properties": {"preset": {"enum": crate::friction::FrictionLaw::preset_names()}, "shape": shaped}},
+                 "properties": {"preset": {"enum": crate::friction::FrictionLaw::preset_names()}, "shape": shaped, "history": history}},
                 {"type": "object", "additionalProperties": false, "required": ["shape", "fs", "fd", "lambda", "radius", "load"],
-                 "properties": {"shape": shaped, "fs": num, "fd": num, "lambda": num, "radius": num, "load": num}}
+                 "properties": {"shape": shaped, "fs": num, "fd": num, "lambda": num, "radius": num, "load": num, "history": history}}
             ]
         })
     }

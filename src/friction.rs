@@ -40,6 +40,50 @@
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+/// Which slip a node's friction coefficient is a function of.
+///
+/// * `accumulated` (the default, the paper's model): the total slip path since the start of
+///   the run. Weakening is permanent: a node that has slipped Δ stays at f_d, whatever happens
+///   after, as for wear that polishes the asperities away for good.
+/// * `since_stick`: the slip since the node last stuck (or was out of contact). A node that
+///   sticks regains f_s, as in the slip-weakening laws of earthquake-rupture codes that heal
+///   (the weakened state is a transient of sliding, not a property of the surface).
+///
+/// Under monotonic loading the two are the same: a node that slips keeps slipping.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum History {
+    #[default]
+    Accumulated,
+    SinceStick,
+}
+
+impl History {
+    pub fn is_accumulated(&self) -> bool {
+        *self == History::Accumulated
+    }
+
+    /// The slip μ sees after a step: `prev + |Δv̂|` for a node that slipped; for one that
+    /// stuck or opened, unchanged (accumulated) or zero (healed).
+    pub fn advance(self, prev: f64, slipped: Option<f64>) -> f64 {
+        match (slipped, self) {
+            (Some(dv), _) => prev + dv.abs(),
+            (None, History::Accumulated) => prev,
+            (None, History::SinceStick) => 0.0,
+        }
+    }
+}
+
 /// Errors of friction-law construction and evaluation.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum FrictionError {

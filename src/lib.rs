@@ -14,6 +14,7 @@ pub mod contact;
 pub mod dofs;
 pub mod driver;
 pub mod elasticity;
+pub mod energy;
 pub mod error;
 pub mod friction;
 pub mod linsolve;

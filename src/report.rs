@@ -23,6 +23,9 @@ pub struct StepRecord {
     pub cutbacks: usize,
     pub contact: Option<ContactFigures>,
     pub wall_s: f64,
+    /// The cycle (from 1) of a stage of a cycle group.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cycle: Option<usize>,
 }
 
 /// The friction law and the paper's scales of the run (eqs. Maugis, Maugis10, Lambda, s0).
@@ -97,6 +100,9 @@ pub struct Summary {
     pub output_dir: String,
     /// `completed`, or why the run stopped early.
     pub status: String,
+    /// The energy balance, when the run keeps it (see [`crate::case::Output::energy`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub energy: Option<crate::energy::EnergySummary>,
 }
 
 /// The self-checks of the last converged step (none when no step converged).
@@ -323,6 +329,7 @@ pub fn history_csv(records: &[StepRecord]) -> String {
                 c.fy,
                 r.wall_s,
                 c.mean_slip,
+                r.cycle.unwrap_or(0) as f64,
             ]
         })
         .collect();
@@ -349,6 +356,7 @@ pub fn history_csv(records: &[StepRecord]) -> String {
             "contact_fy",
             "wall_s",
             "mean_slip",
+            "cycle",
         ],
         &rows,
         &[
@@ -359,6 +367,7 @@ pub fn history_csv(records: &[StepRecord]) -> String {
             "n_contact",
             "n_stick",
             "n_slip",
+            "cycle",
         ],
     )
 }
@@ -433,6 +442,7 @@ pub fn summarise(
         steps: records,
         output_dir: out_dir.display().to_string(),
         status,
+        energy: None,
     };
     (summary, failure, lost_equilibrium)
 }

@@ -7,6 +7,7 @@ use crate::contact::solver::State;
 pub use crate::driver::{LogLevel, MAX_CUTBACKS, Simulation, StepEvent, simulate};
 pub use crate::error::RunError;
 use crate::model::Model;
+use crate::energy::EnergyMeter;
 use crate::output::series::{Series, write_file};
 use crate::report::{Summary, end_summary, history_csv, print_warnings, summarise};
 use std::path::{Path, PathBuf};
@@ -102,10 +103,14 @@ pub fn run_model(
     let progress = Progress::new(case, level);
     let law = model.friction.clone();
     let mut series = Series::new(&model, case, out_dir, &stem);
+    let mut energy = case.tracks_energy().then(|| EnergyMeter::new(&model));
     // The last converged step not yet written (`output.every` > 1).
     let mut unwritten: Option<Unwritten> = None;
     let sim = simulate(&model, case, law.as_ref(), level, &mut |ev: &StepEvent| {
         progress.step(ev);
+        if let Some(m) = energy.as_mut() {
+            m.step(&model, ev);
+        }
         if !case.output.vtu {
             return Ok(());
         }
@@ -137,7 +142,12 @@ pub fn run_model(
         &out_dir.join("history.csv"),
         history_csv(&sim.records).as_bytes(),
     )?;
-    let (summary, failure, lost_equilibrium) = summarise(&model, case, case_path, out_dir, sim);
+    let (mut summary, failure, lost_equilibrium) =
+        summarise(&model, case, case_path, out_dir, sim);
+    if let Some(m) = &energy {
+        write_file(&out_dir.join("energy.csv"), m.csv().as_bytes())?;
+        summary.energy = m.summary();
+    }
     write_file(
         &out_dir.join("summary.json"),
         serde_json::to_string_pretty(&summary)

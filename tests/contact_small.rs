@@ -36,6 +36,7 @@ fn options(method: Method) -> Options {
         max_iterations: 60,
         tolerance: 1e-12,
         verbose: false,
+        history: Default::default(),
     }
 }
 

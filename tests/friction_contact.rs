@@ -568,6 +568,7 @@ fn fig2_on_l1() -> (stickslip::model::Model, stickslip::contact::solver::Options
         max_iterations: 80,
         tolerance: 1e-12,
         verbose: false,
+        history: Default::default(),
     };
     (model, opt)
 }

@@ -43,6 +43,7 @@ fn solve_model(model: &Model, load: f64, method: Method, kappa: f64) -> Solution
         max_iterations: 100,
         tolerance: 1e-10,
         verbose: false,
+        history: Default::default(),
     };
     let prev = cm.system.initial_state();
     let out = model

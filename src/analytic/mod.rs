@@ -25,6 +25,7 @@ pub mod dcm;
 pub mod elliptic;
 pub mod hertz;
 pub mod jkr;
+pub mod reversal;
 pub(crate) mod roots;
 pub mod scales;
 
@@ -32,6 +33,7 @@ pub use cattaneo::CattaneoMindlin;
 pub use dcm::{DcmState, DoubleCm};
 pub use hertz::{Geometry, Hertz};
 pub use jkr::{Jkr, JkrCurve};
+pub use reversal::{Branch, Reversal};
 
 use thiserror::Error;
 

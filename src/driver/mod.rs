@@ -86,6 +86,7 @@ pub fn simulate(
             max_iterations: c.max_iterations.unwrap_or(60),
             tolerance: c.tolerance.unwrap_or(1e-8),
             verbose: log >= LogLevel::Debug,
+            history: c.friction.as_ref().map_or_else(Default::default, |f| f.history),
         }),
         cstate: model.contact.as_ref().map(|c| c.system.initial_state()),
         lu_cache: solver::LuCache::default(),
@@ -433,6 +434,7 @@ impl Driver<'_> {
             cutbacks,
             contact: figures,
             wall_s: wall,
+            cycle: self.case.stages[si].cycle,
         });
     }
 }

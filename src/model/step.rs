@@ -202,7 +202,7 @@ impl Model {
             if fs > fd {
                 let tol = 1e-9 * (fs - fd);
                 fig.b =
-                    half_width(&|j| st.status[j] != Status::Open && law.mu(st.slip[j]) > fd + tol);
+                    half_width(&|j| st.status[j] != Status::Open && law.mu(st.slip_mu[j]) > fd + tol);
             }
         }
         fig

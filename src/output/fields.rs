@@ -6,8 +6,8 @@ use crate::contact::solver::State;
 use crate::model::Model;
 use crate::output::{self, vtu};
 
-/// Per slave node: (p, q, gap, slip, slip increment, status, μ, q/p).
-fn contact_fields(model: &Model, st: &State) -> Vec<[f64; 8]> {
+/// Per slave node: (p, q, gap, slip, slip increment, status, μ, q/p, the slip μ sees).
+fn contact_fields(model: &Model, st: &State) -> Vec<[f64; 9]> {
     let m = &model.contact.as_ref().expect("contact").pair.mortar;
     (0..m.slave_nodes.len())
         .map(|j| {
@@ -24,12 +24,13 @@ fn contact_fields(model: &Model, st: &State) -> Vec<[f64; 8]> {
                 st.status[j].code(),
                 st.mu[j],
                 ratio,
+                st.slip_mu[j],
             ]
         })
         .collect()
 }
 
-const CONTACT_FIELDS: [&str; 8] = [
+const CONTACT_FIELDS: [&str; 9] = [
     "pressure",
     "shear",
     "gap",
@@ -38,6 +39,7 @@ const CONTACT_FIELDS: [&str; 8] = [
     "status",
     "mu",
     "q_over_p",
+    "slip_mu",
 ];
 
 /// The contact dataset: the slave edges of the candidate zone with the nodal contact fields.

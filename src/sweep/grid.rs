@@ -39,6 +39,8 @@ pub struct Grid {
     pub lambda: Option<Vec<f64>>,
     pub radius: Option<f64>,
     pub load: Option<f64>,
+    /// Histories of the law (accumulated, since_stick); default `["accumulated"]`.
+    pub history: Option<Vec<crate::friction::History>>,
     /// Targets of the case's last stage along x (force, displacement or slip), one load each.
     pub pilot_x: Option<Vec<Control>>,
 }
@@ -75,6 +77,7 @@ pub fn expand(case: &Case, file: &SweepFile, path: &Path) -> Result<Rows, SweepE
             || g.f_d.is_some()
             || g.delta.is_some()
             || g.lambda.is_some()
+            || g.history.is_some()
     });
     if grid_laws && !file.friction.is_empty() {
         return Err(bad(
@@ -142,7 +145,7 @@ pub fn expand(case: &Case, file: &SweepFile, path: &Path) -> Result<Rows, SweepE
     Ok(Rows { loads, laws })
 }
 
-/// The laws of a grid, shape outermost, then f_s, f_d, and Δ or Λ fastest.
+/// The laws of a grid, shape outermost, then f_s, f_d, Δ or Λ, and history fastest.
 fn grid_laws_of(
     g: &Grid,
     bad: &dyn Fn(&str, String) -> SweepError,
@@ -179,21 +182,30 @@ fn grid_laws_of(
             "a grid over `lambda` needs `radius` and `load` (the Hertz scale of Λ)".into(),
         ));
     }
+    let histories = g
+        .history
+        .clone()
+        .unwrap_or_else(|| vec![crate::friction::History::Accumulated]);
+    if histories.is_empty() {
+        return Err(bad("grid.history", "is empty: the grid has no point".into()));
+    }
     let mut laws = Vec::new();
     for s in &shapes {
         for &fs in &f_s {
             for &fd in &f_d {
                 for &x in &xs {
-                    let v = if key == "delta" {
-                        json!({"shape": s, "fs": fs, "fd": fd, "delta": x})
-                    } else {
-                        json!({"shape": s, "fs": fs, "fd": fd, "lambda": x,
-                               "radius": g.radius, "load": g.load})
-                    };
-                    let spec: FrictionSpec = serde_json::from_value(v.clone()).map_err(|e| {
-                        bad("grid", format!("point {v}: {e}"))
-                    })?;
-                    laws.push(spec);
+                    for h in &histories {
+                        let mut v = if key == "delta" {
+                            json!({"shape": s, "fs": fs, "fd": fd, "delta": x})
+                        } else {
+                            json!({"shape": s, "fs": fs, "fd": fd, "lambda": x,
+                                   "radius": g.radius, "load": g.load})
+                        };
+                        v["history"] = json!(h);
+                        let spec: FrictionSpec = serde_json::from_value(v.clone())
+                            .map_err(|e| bad("grid", format!("point {v}: {e}")))?;
+                        laws.push(spec);
+                    }
                 }
             }
         }

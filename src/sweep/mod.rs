@@ -143,11 +143,15 @@ pub fn run(case_path: &Path, sweep_path: &Path, opts: &SweepOptions) -> Result<(
     let mut laws = rows
         .laws
         .iter()
-        .map(|f| f.resolve(e_star))
+        .map(|f| f.resolve(e_star).map(|l| (l, f.history)))
         .collect::<Result<Vec<_>, _>>()
         .map_err(crate::model::ModelError::Friction)?;
     if laws.is_empty() {
-        laws.push(model.friction.clone().expect("checked above"));
+        let history = case.contact.as_ref().and_then(|c| c.friction.as_ref());
+        laws.push((
+            model.friction.clone().expect("checked above"),
+            history.map_or_else(Default::default, |f| f.history),
+        ));
     }
     let build_s = t.elapsed().as_secs_f64();
     std::fs::create_dir_all(&out_dir).map_err(|source| SweepError::Write {
@@ -294,7 +298,7 @@ pub struct SweepRow {
 pub fn sweep(
     model: &Model,
     loads: &[Case],
-    laws: &[crate::friction::FrictionLaw],
+    laws: &[(crate::friction::FrictionLaw, crate::friction::History)],
     rows: &[usize],
     on_row: &(dyn Fn(SweepRow) -> Result<(), SweepError> + Sync),
 ) -> Result<(), SweepError> {
@@ -302,9 +306,17 @@ pub fn sweep(
     rows.par_iter()
         .map(|&row| {
             let (load_index, index) = (row / laws.len(), row % laws.len());
-            let (case, law) = (&loads[load_index], &laws[index]);
+            let (law, history) = &laws[index];
+            // The row's case: the load's, with the row's law (and its history) as its friction.
+            let mut case = loads[load_index].clone();
+            if let Some(c) = case.contact.as_mut() {
+                c.friction = Some(crate::case::FrictionSpec {
+                    kind: crate::case::FrictionKind::Law(law.clone()),
+                    history: *history,
+                });
+            }
             let t = Instant::now();
-            let res = simulate(model, case, Some(law), LogLevel::Error, &mut |_| Ok(()));
+            let res = simulate(model, &case, Some(law), LogLevel::Error, &mut |_| Ok(()));
             let wall_s = t.elapsed().as_secs_f64();
             match res {
                 Ok(mut sim) => {

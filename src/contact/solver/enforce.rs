@@ -143,7 +143,7 @@ impl ContactSystem {
             let new = if xi_n <= 0.0 {
                 Status::Open
             } else if let Some(law) = t.law {
-                let mu_j = law.mu(t.prev.slip[j] + dv.abs());
+                let mu_j = law.mu(t.prev.slip_mu[j] + dv.abs());
                 let xi_t = match t.method {
                     Method::Newton => t.mu[ns + j] - c * dv,
                     Method::Penalty => t.prev.f_t[j] - t.eps[j] * dv,
@@ -185,7 +185,7 @@ impl ContactSystem {
         if let Some(law) = it.law {
             for j in (0..ns).filter(|&j| it.status[j] == Status::Slip) {
                 let dv = self.y_at(w0, mu, ns + j) - prev.v[j];
-                let u_k = prev.slip[j] + dv.abs();
+                let u_k = prev.slip_mu[j] + dv.abs();
                 slip[j] = SlipLin {
                     mu: law.mu(u_k),
                     dmu: law.dmu_du(u_k).unwrap_or(0.0),
@@ -415,7 +415,7 @@ impl ContactSystem {
                         Status::Stick => dv,
                         _ => {
                             let l = it.law.expect("friction");
-                            mu[u] - it.sign[j] * l.mu(it.prev.slip[j] + dv.abs()) * mu[j]
+                            mu[u] - it.sign[j] * l.mu(it.prev.slip_mu[j] + dv.abs()) * mu[j]
                         }
                     }
                 } else {

@@ -99,8 +99,11 @@ pub struct State {
     pub z: Vec<f64>,
     /// Relative tangential displacement v̂ (master minus slave).
     pub v: Vec<f64>,
-    /// Accumulated slip U.
+    /// Accumulated slip U: the total slip path.
     pub slip: Vec<f64>,
+    /// The slip μ is evaluated at: `slip`, or with a healing law
+    /// ([`crate::friction::History::SinceStick`]) the slip since the node last stuck or opened.
+    pub slip_mu: Vec<f64>,
     /// Slip increment of the last step (signed).
     pub dv: Vec<f64>,
     pub gap: Vec<f64>,
@@ -176,6 +179,8 @@ pub struct Options {
     pub tolerance: f64,
     /// Print every iteration (sets and update) to standard error.
     pub verbose: bool,
+    /// Which slip μ is a function of.
+    pub history: crate::friction::History,
 }
 
 /// Result of one step solve.
@@ -233,6 +238,7 @@ impl ContactSystem {
             z: vec![0.0; self.kg.len()],
             v: self.v0.clone(),
             slip: vec![0.0; ns],
+            slip_mu: vec![0.0; ns],
             dv: vec![0.0; ns],
             gap: self.gap0.clone(),
             status: vec![Status::Open; ns],

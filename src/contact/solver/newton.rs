@@ -8,7 +8,7 @@ use super::{
     ContactError, ContactSystem, Iterate, LuCache, Method, NewtonSystem, Options, PilotDrive,
     State, Status, StepOutcome,
 };
-use crate::friction::FrictionLaw;
+use crate::friction::{FrictionLaw, History};
 
 impl ContactSystem {
     /// Solves one load step from the committed state `prev`, with the condensed load `w0`
@@ -113,7 +113,7 @@ impl ContactSystem {
                     if opt.method != Method::AugmentedLagrangian
                         || self.penetration(&y, &status) <= opt.tolerance
                     {
-                        return Ok(self.finish(w0, &mu, &status, law, prev, it, last_update));
+                        return Ok(self.finish(w0, &mu, &status, law, prev, (it, last_update), opt.history));
                     }
                     // Outer update of the augmented Lagrangian: the multipliers move to the
                     // forces, and the penetration shrinks with each round.
@@ -275,8 +275,8 @@ impl ContactSystem {
         status: &[Status],
         law: Option<&FrictionLaw>,
         prev: &State,
-        iterations: usize,
-        last_update: f64,
+        (iterations, last_update): (usize, f64),
+        history: History,
     ) -> StepOutcome {
         let ns = self.ns;
         let y = self.y(w0, mu);
@@ -298,8 +298,10 @@ impl ContactSystem {
                 } else {
                     0.0
                 };
+            let slipped = (status[j] == Status::Slip).then_some(st.dv[j]);
+            st.slip_mu[j] = history.advance(prev.slip_mu[j], slipped);
             st.status[j] = status[j];
-            st.mu[j] = law.map_or(0.0, |l| l.mu(st.slip[j]));
+            st.mu[j] = law.map_or(0.0, |l| l.mu(st.slip_mu[j]));
         }
         for k in 0..self.kg.len() {
             st.z[k] = mu[2 * ns + k];
