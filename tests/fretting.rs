@@ -136,8 +136,10 @@ fn fretting_loops_follow_mindlin_deresiewicz() {
 
 /// Healing: under monotonic loading the two histories give the same answer; after a reversal
 /// the nodes that stuck at the turning point have regained f_s with `since_stick` (the slip μ
-/// sees restarts from zero) and kept their weakened μ with `accumulated`; and the healed
-/// contact dissipates more per cycle (a higher mean friction in the reversed slip zones).
+/// sees restarts from zero) and kept their weakened μ with `accumulated`; and in the first
+/// cycle the healed contact dissipates more (measured 1.1698e-2 against 1.1614e-2 N mm/mm: the
+/// reversed slip starts from f_s; over later cycles the two approach and cross, see
+/// `post/fretting.py`).
 #[test]
 fn healing_restores_static_friction_after_a_stick() {
     let law = |history: &'static str| {
@@ -176,7 +178,7 @@ fn healing_restores_static_friction_after_a_stick() {
     let dissipation = |r: &CaseRun| r.summary()["energy"]["per_cycle"][0]["dissipation"].as_f64().unwrap();
     let (da, dh) = (dissipation(&acc), dissipation(&heal));
     println!("dissipation per cycle: accumulated {da:.6e}, since_stick {dh:.6e}");
-    assert!(dh > da, "healing must dissipate more: {dh} vs {da}");
+    assert!(dh > da, "healing must dissipate more in the first cycle: {dh} vs {da}");
 }
 
 /// Bad cycle groups: a clear message naming the key, exit status 2, nothing written.
