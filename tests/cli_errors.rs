@@ -45,7 +45,9 @@ fn run_case(name: &str, case: &str, mesh: &str) -> (i32, String, bool) {
     (r.code, r.stderr, wrote)
 }
 
-fn assert_refused(name: &str, case: &str, mesh: &str, needles: &[&str]) {
+/// Asserts that the case is refused with exit status 2, a message containing every needle, and
+/// no output; returns the needles, quoted, for the validation table.
+fn assert_refused(name: &str, case: &str, mesh: &str, needles: &[&str]) -> String {
     let (code, err, wrote) = run_case(name, case, mesh);
     assert_eq!(code, 2, "{name}: exit status (stderr: {err})");
     for n in needles {
@@ -55,6 +57,16 @@ fn assert_refused(name: &str, case: &str, mesh: &str, needles: &[&str]) {
         );
     }
     assert!(!wrote, "{name}: output was written");
+    quoted(needles)
+}
+
+/// `“a”, “b”`.
+fn quoted(needles: &[&str]) -> String {
+    needles
+        .iter()
+        .map(|n| format!("“{n}”"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 #[test]
@@ -88,11 +100,18 @@ fn good_case_runs_and_writes_everything() {
 #[test]
 fn unknown_key_is_named_with_its_line() {
     let case = GOOD_CASE.replace("\"steps\": 2", "\"steps\": 2, \"stpes\": 3");
-    assert_refused(
+    let named = assert_refused(
         "unknown-key",
         &case,
         &square_msh(),
         &["case.json", "unknown field `stpes`", "line 6"],
+    );
+    validation_row(
+        "070-cli-unknown-key",
+        "bad input: unknown key in the case file",
+        "—",
+        &format!("exit 2, no output; the message names {named}"),
+        "cli_errors",
     );
 }
 
@@ -128,15 +147,32 @@ fn out_of_range_values_name_the_key() {
             &["stages[0].pilot_x", "no `pilot`"],
         ),
     ];
+    let mut named = Vec::new();
     for (name, from, to, needles) in cases {
-        assert_refused(name, &GOOD_CASE.replace(from, to), &msh, needles);
+        named.push(assert_refused(
+            name,
+            &GOOD_CASE.replace(from, to),
+            &msh,
+            needles,
+        ));
     }
+    validation_row(
+        "071-cli-ranges",
+        "bad input: values out of range (ν = 0.5, E < 0, zero steps, a traction of 1e400, Hertz a = 0, a pilot load without a pilot)",
+        "—",
+        &format!(
+            "exit 2, no output, for each of the {}; the messages name {}",
+            named.len(),
+            named.join("; ")
+        ),
+        "cli_errors",
+    );
 }
 
 #[test]
 fn missing_and_empty_groups_are_named() {
     let msh = square_msh();
-    assert_refused(
+    let missing = assert_refused(
         "missing",
         &GOOD_CASE.replace("\"group\": \"body\"", "\"group\": \"lower_body\""),
         &msh,
@@ -152,35 +188,49 @@ fn missing_and_empty_groups_are_named() {
         "$PhysicalNames\n6\n1 77 \"ghost\"\n",
         1,
     );
-    assert_refused(
+    let empty = assert_refused(
         "empty",
         &GOOD_CASE.replace("\"group\": \"top\"", "\"group\": \"ghost\""),
         &empty,
         &["`ghost` is empty"],
     );
-    assert_refused(
+    let wrong = assert_refused(
         "wrongdim",
         &GOOD_CASE.replace("\"group\": \"bottom\"", "\"group\": \"body\""),
         &msh,
         &["`body` is a surface"],
+    );
+    validation_row(
+        "072-cli-groups",
+        "bad input: missing group, empty group, a surface where a curve goes",
+        "—",
+        &format!("exit 2, no output, for each; the messages name {missing}; {empty}; {wrong}"),
+        "cli_errors",
     );
 }
 
 #[test]
 fn old_and_first_order_meshes_say_how_to_fix_them() {
     let msh22 = std::fs::read_to_string(repo().join("meshes/vm272_L0_msh22.msh")).unwrap();
-    assert_refused(
+    let old = assert_refused(
         "msh22",
         GOOD_CASE,
         &msh22,
         &["MSH format 2.2", "re-export it as MSH 4.1", "-format msh41"],
     );
     let lin = std::fs::read_to_string(repo().join("meshes/vm272_first_order.msh")).unwrap();
-    assert_refused(
+    let first = assert_refused(
         "first-order",
         GOOD_CASE,
         &lin,
         &["first-order mesh", "Mesh.ElementOrder = 2"],
+    );
+    validation_row(
+        "073-cli-old-meshes",
+        "bad input: MSH 2.2 file, first-order mesh",
+        "—",
+        &format!("exit 2, no output, for each; the messages say how to fix it: {old}; {first}"),
+        "cli_errors",
     );
 }
 
@@ -188,14 +238,22 @@ fn old_and_first_order_meshes_say_how_to_fix_them() {
 fn corrupt_and_truncated_meshes_are_refused() {
     let msh = square_msh();
     let cut = &msh[..msh.len() * 2 / 3];
-    assert_refused("truncated", GOOD_CASE, cut, &["mesh.msh", "cannot parse"]);
-    assert_refused("not-msh", GOOD_CASE, "hello\n", &["not a gmsh mesh file"]);
+    let truncated = assert_refused("truncated", GOOD_CASE, cut, &["mesh.msh", "cannot parse"]);
+    let not_msh = assert_refused("not-msh", GOOD_CASE, "hello\n", &["not a gmsh mesh file"]);
     let dir = tempdir("nofile");
     let (code, _, err) = stickslip(&["run", dir.join("nope.json").to_str().unwrap()]);
     assert_eq!(code, 2);
-    assert!(
-        err.contains("nope.json") && err.contains("cannot read"),
-        "{err}"
+    let needles = ["nope.json", "cannot read"];
+    assert!(needles.iter().all(|n| err.contains(n)), "{err}");
+    validation_row(
+        "074-cli-corrupt-mesh",
+        "bad input: truncated mesh file, a file that is not a mesh, a missing case file",
+        "—",
+        &format!(
+            "exit 2, no output, for each; the messages name {truncated}; {not_msh}; {}",
+            quoted(&needles)
+        ),
+        "cli_errors",
     );
 }
 
@@ -205,7 +263,14 @@ fn bodies_sharing_nodes_are_refused() {
     let (nodes, left, right, _) = two_squares();
     let msh = msh41(&nodes, &[("a", left), ("b", right)], &[]);
     let case = r#"{"mesh": "mesh.msh", "bodies": [{"group": "a", "E": 1, "nu": 0.3}, {"group": "b", "E": 1, "nu": 0.3}], "stages": [{"steps": 1}]}"#;
-    assert_refused("shared", case, &msh, &["bodies `a` and `b` share node"]);
+    let named = assert_refused("shared", case, &msh, &["bodies `a` and `b` share node"]);
+    validation_row(
+        "075-cli-shared-nodes",
+        "bad input: two bodies sharing nodes",
+        "—",
+        &format!("exit 2, no output; the message names {named}"),
+        "cli_errors",
+    );
 }
 
 #[test]
@@ -221,16 +286,26 @@ fn badly_curved_elements_are_named_and_clockwise_ones_are_reoriented() {
     std::fs::write(dir.join("m.msh"), &msh).unwrap();
     let (code, out, _) = stickslip(&["mesh-info", dir.join("m.msh").to_str().unwrap()]);
     assert_eq!(code, 0);
-    assert!(out.contains("\"reoriented_triangles\": 1"), "{out}");
+    let reoriented = "\"reoriented_triangles\": 1";
+    assert!(out.contains(reoriented), "{out}");
     // Push a mid-edge node of an interior edge far across its element: the Jacobian turns negative.
     let m = tris[0][4];
     nodes[m] = [nodes[m][0] - 0.45, nodes[m][1] + 0.45];
     let msh = msh41_sides(&nodes, &[("body", tris)], sides);
-    assert_refused(
+    let named = assert_refused(
         "jacobian",
         GOOD_CASE,
         &msh,
         &["element 9", "Jacobian is not positive"],
+    );
+    validation_row(
+        "076-cli-jacobian",
+        "bad input: a mid-edge node pushed across its element (bad Jacobian); a clockwise triangle",
+        "—",
+        &format!(
+            "bad Jacobian: exit 2, no output, the message names {named}; clockwise: reoriented (`mesh-info`: {reoriented}) and the case runs (exit 0)"
+        ),
+        "cli_errors",
     );
 }
 
@@ -250,11 +325,19 @@ fn unsupported_element_types_are_named() {
     let bad = out.join("\n") + "\n";
     let (code, err, wrote) = run_case("lin2", GOOD_CASE, &bad);
     assert_eq!(code, 2, "{err}");
-    assert!(
-        err.contains("gmsh type 1") && err.contains("element "),
-        "{err}"
-    );
+    let needles = ["gmsh type 1", "element "];
+    assert!(needles.iter().all(|n| err.contains(n)), "{err}");
     assert!(!wrote);
+    validation_row(
+        "077-cli-element-type",
+        "bad input: unsupported element type (2-node lines)",
+        "—",
+        &format!(
+            "exit {code}, no output; the message names {}",
+            quoted(&needles)
+        ),
+        "cli_errors",
+    );
 }
 
 #[test]
@@ -263,11 +346,18 @@ fn support_on_the_pilot_face_is_refused() {
         "\"stages\"",
         "\"pilot\": {\"group\": \"bottom\"},\n  \"stages\"",
     );
-    assert_refused(
+    let named = assert_refused(
         "pilot-support",
         &case,
         &square_msh(),
         &["both supported (group `bottom`)", "rigid pilot face"],
+    );
+    validation_row(
+        "078-cli-pilot-support",
+        "bad input: a support on the pilot face",
+        "—",
+        &format!("exit 2, no output; the message names {named}"),
+        "cli_errors",
     );
 }
 
@@ -278,11 +368,18 @@ fn load_on_a_body_not_in_use_is_refused() {
     let case = r#"{"mesh": "mesh.msh", "bodies": [{"group": "a", "E": 1, "nu": 0.3}],
       "supports": [{"group": "left", "ux": 0, "uy": 0}],
       "tractions": [{"group": "right", "kind": "uniform", "tx": 1}], "stages": [{"steps": 1, "traction_scale": 1}]}"#;
-    assert_refused(
+    let named = assert_refused(
         "dangling",
         case,
         &msh,
         &["group `right` is not an edge of any triangle"],
+    );
+    validation_row(
+        "079-cli-unused-body",
+        "bad input: a load on a body not in use",
+        "—",
+        &format!("exit 2, no output; the message names {named}"),
+        "cli_errors",
     );
 }
 
@@ -293,9 +390,17 @@ fn an_unheld_pilot_under_force_control_fails_cleanly() {
       "pilot": {"group": "top"}, "stages": [{"steps": 1, "pilot_y": {"force": -1.0}}]}"#;
     let (code, err, _) = run_case("unheld", case, &square_msh());
     assert_eq!(code, 3, "{err}");
-    assert!(
-        err.contains("not held") || err.contains("not positive definite"),
-        "{err}"
+    let needles = ["not held", "not positive definite"];
+    assert!(needles.iter().any(|n| err.contains(n)), "{err}");
+    validation_row(
+        "080-cli-unheld-pilot",
+        "bad input: a pilot under force control holding an otherwise unsupported body",
+        "—",
+        &format!(
+            "exit {code} (solver failure) with a message naming {}",
+            quoted(&needles).replace(", ", " or ")
+        ),
+        "cli_errors",
     );
 }
 

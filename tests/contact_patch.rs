@@ -29,13 +29,37 @@ fn pressures(slave: &str, master: &str) -> Vec<(f64, f64)> {
 
 #[test]
 fn uniform_pressure_crosses_a_non_matching_interface_exactly() {
-    for (slave, master) in [("lower_top", "upper_bottom"), ("upper_bottom", "lower_top")] {
+    // Largest |p − 3|/3 at a slave node, bounded per slave face (measured 0 with the lower face
+    // slave, 3.3e-13 with the upper).
+    let mut rel = Vec::new();
+    for (slave, master, tol) in [
+        ("lower_top", "upper_bottom", 1e-15),
+        ("upper_bottom", "lower_top", 1e-12),
+    ] {
         let p = pressures(slave, master);
         assert!(p.len() >= 11, "{slave}: {} slave nodes", p.len());
         let worst = p.iter().map(|(_, v)| (v - 3.0).abs()).fold(0.0, f64::max);
-        assert!(
-            worst < 1e-10 * 3.0,
-            "slave {slave}: max |p − 3| = {worst:e}"
+        println!(
+            "slave {slave}: {} nodes, max |p − 3|/3 = {:.2e}",
+            p.len(),
+            worst / 3.0
         );
+        assert!(worst < tol * 3.0, "slave {slave}: max |p − 3| = {worst:e}");
+        rel.push((p.len(), worst / 3.0, tol));
     }
+    validation_row(
+        "130-contact-patch",
+        "contact patch test: two flat blocks, non-matching distorted meshes, uniform pressure; either face slave",
+        "exact",
+        &format!(
+            "nodal pressures equal the applied one to {} relative with the lower face slave ({} nodes; asserted < {:.0e}), {} with the upper ({} nodes; asserted < {:.0e})",
+            sci(rel[0].1),
+            rel[0].0,
+            rel[0].2,
+            sci(rel[1].1),
+            rel[1].0,
+            rel[1].2
+        ),
+        "contact_patch",
+    );
 }

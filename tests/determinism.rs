@@ -180,4 +180,15 @@ fn one_and_two_threads_give_identical_files() {
         diffs.join("\n")
     );
     let _ = std::fs::remove_dir_all(&dir);
+    validation_row(
+        "320-determinism",
+        "the same case with `--threads 1` and `--threads 2`",
+        "—",
+        &format!(
+            "byte-identical contact CSV and VTU files ({} CSVs, {} .vtu), and history.csv without its wall-clock column",
+            f1.iter().filter(|n| n.ends_with(".csv")).count(),
+            f1.iter().filter(|n| n.ends_with(".vtu")).count()
+        ),
+        "determinism",
+    );
 }

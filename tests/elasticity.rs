@@ -18,7 +18,18 @@ use stickslip::model::Model;
 
 #[test]
 fn patch_test_on_distorted_curved_mesh_is_exact() {
-    patch_test(Material { e: 70.0, nu: 0.33 });
+    // Measured 4.8e-18 and 7.9e-15.
+    let (disp_tol, stress_tol) = (2e-17, 4e-14);
+    let (disp, stress) = patch_test(Material { e: 70.0, nu: 0.33 }, disp_tol, stress_tol);
+    validation_row(
+        "010-patch",
+        "patch test, distorted mesh with curved interior edges",
+        "linear field, exact",
+        &format!(
+            "displacement error {disp:.1e} (asserted < {disp_tol:.0e}), constant stress to {stress:.1e} (asserted < {stress_tol:.0e}) of σ_yy"
+        ),
+        "elasticity",
+    );
 }
 
 /// The mixed P2/P0 element of nearly incompressible bodies passes the same patch test.
@@ -29,10 +40,24 @@ fn patch_test_of_the_mixed_element_is_exact() {
         nu: 0.4999,
     };
     assert!(mat.is_mixed());
-    patch_test(mat);
+    // Measured 1.3e-15 and 2.3e-15.
+    let (disp_tol, stress_tol) = (5e-15, 1e-14);
+    let (disp, stress) = patch_test(mat, disp_tol, stress_tol);
+    validation_row(
+        "011-patch-mixed",
+        "the same patch test with the mixed P2/P0 element (ν = 0.4999)",
+        "linear field, exact",
+        &format!(
+            "displacement error {disp:.1e} (asserted < {disp_tol:.0e}), constant stress to {stress:.1e} (asserted < {stress_tol:.0e}) of σ_yy"
+        ),
+        "elasticity",
+    );
 }
 
-fn patch_test(mat: Material) {
+/// Solves the patch test for `mat`; returns the largest nodal displacement error (the field is
+/// of order 1e-3) and the largest stress error relative to |σ_yy|, asserted here below
+/// `disp_tol` and `stress_tol`.
+fn patch_test(mat: Material, disp_tol: f64, stress_tol: f64) -> (f64, f64) {
     let mut mesh = gmsh::read(&repo().join("meshes/patch_curved.msh")).unwrap();
     // Boundary nodes: those of the four sides.
     let mut boundary = vec![false; mesh.nodes.len()];
@@ -89,20 +114,28 @@ fn patch_test(mat: Material) {
         let (uh, ue) = (dofs.displacement(n, &u), lin(mesh.nodes[n]));
         max_err = max_err.max((uh[0] - ue[0]).abs().max((uh[1] - ue[1]).abs()));
     }
-    assert!(max_err < 1e-14, "patch test displacement error {max_err:e}");
+    assert!(
+        max_err < disp_tol,
+        "patch test displacement error {max_err:e}"
+    );
     // Constant stress at every node of every element.
     let exact = mat.stress([2e-3, 3e-3, -1e-3 + 4e-4]);
+    let mut stress_err: f64 = 0.0;
     for (e, t) in mesh.triangles.iter().enumerate() {
         let ue: [f64; 12] = std::array::from_fn(|i| dofs.displacement(t.nodes[i / 2], &u)[i % 2]);
         for s in stickslip::elasticity::nodal_stress(&mesh.tri_coords(e), &ue, &mat) {
             for i in 0..3 {
-                assert!(
-                    (s[i] - exact[i]).abs() < 1e-12 * exact[1].abs(),
-                    "element {e}: {s:?} vs {exact:?}"
-                );
+                let rel = (s[i] - exact[i]).abs() / exact[1].abs();
+                stress_err = stress_err.max(rel);
+                assert!(rel < stress_tol, "element {e}: {s:?} vs {exact:?}");
             }
         }
     }
+    println!(
+        "patch test (ν = {}): displacement error {max_err:.2e}, stress error {stress_err:.2e} of |σ_yy|",
+        mat.nu
+    );
+    (max_err, stress_err)
 }
 
 /// u = (sin πx sin πy, sin πx sin πy) on the unit square, zero on its boundary; body force
@@ -160,8 +193,16 @@ fn manufactured_solution_converges_at_rates_3_and_2() {
     }
     let (r2, re) = (fitted_rate(&hs, &e2), fitted_rate(&hs, &ee));
     println!("manufactured: L2 errors {e2:?} rate {r2:.3}; energy errors {ee:?} rate {re:.3}");
-    assert!(r2 >= 2.8, "L2 rate {r2}");
-    assert!(re >= 1.8, "energy rate {re}");
+    let (min_l2, min_energy) = (2.8, 1.8);
+    assert!(r2 >= min_l2, "L2 rate {r2}");
+    assert!(re >= min_energy, "energy rate {re}");
+    validation_row(
+        "020-manufactured",
+        "manufactured solution, 4 distorted meshes",
+        "closed form",
+        &format!("fitted rates: L2 {r2:.3}, energy {re:.3} (asserted ≥ {min_l2}, ≥ {min_energy})"),
+        "elasticity",
+    );
 }
 
 /// Lamé, plane strain, inner radius 1 (pressure p), outer radius 2 (free):
@@ -222,14 +263,28 @@ fn lame_cylinder_curved_edges_keep_the_full_rate() {
     let (hs, errs) = lame_errors("lame_straight", 0.3);
     let (rc, rs) = (fitted_rate(&h, &err), fitted_rate(&hs, &errs));
     println!("Lamé L2 errors: curved {err:?} (rate {rc:.3}); straight {errs:?} (rate {rs:.3})");
-    assert!(rc >= 2.8, "curved-edge rate {rc}");
+    let min_curved = 2.8;
+    let (lo, hi) = (1.6, 2.4);
+    assert!(rc >= min_curved, "curved-edge rate {rc}");
     assert!(
-        rs < 2.4 && rs > 1.6,
+        rs < hi && rs > lo,
         "straight-edged rate {rs} should fall to about 2"
     );
+    // Measured 373 times the curved-edge error.
+    let worse = 300.0;
     assert!(
-        errs[4] > 10.0 * err[4],
+        errs[4] > worse * err[4],
         "straight edges must be markedly worse on the finest mesh"
+    );
+    validation_row(
+        "030-lame",
+        "Lamé thick cylinder, gmsh ladder of 5",
+        "closed form",
+        &format!(
+            "L2 rate {rc:.3} with curved edges, {rs:.3} with straight edges (asserted ≥ {min_curved}; {lo}–{hi}); on the finest mesh straight edges {:.0} times the curved-edge error (asserted > {worse})",
+            errs[4] / err[4]
+        ),
+        "elasticity",
     );
 }
 
@@ -243,9 +298,26 @@ fn lame_cylinder_nearly_incompressible_does_not_lock() {
     let r5 = fitted_rate(&h, &err5);
     let ratio: Vec<f64> = err5.iter().zip(&err3).map(|(a, b)| a / b).collect();
     println!("Lamé ν = 0.4999 L2 errors {err5:?} rate {r5:.3}; relative to ν = 0.3 {ratio:?}");
-    assert!(r5 >= 2.8, "rate {r5}");
+    let min_rate = 2.8;
+    assert!(r5 >= min_rate, "rate {r5}");
     // Measured 1.01–1.11 times the ν = 0.3 error (the standard element: 12–29 times).
+    let max_ratio = 1.15;
     for (l, q) in ratio.iter().enumerate() {
-        assert!(*q < 1.15, "level {l}: {q:.3} times the compressible error");
+        assert!(
+            *q < max_ratio,
+            "level {l}: {q:.3} times the compressible error"
+        );
     }
+    let (lo, hi) = ratio
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), q| (a.min(*q), b.max(*q)));
+    validation_row(
+        "031-lame-incompressible",
+        "Lamé cylinder nearly incompressible, ν = 0.4999, mixed P2/P0 element",
+        "closed form",
+        &format!(
+            "L2 rate {r5:.3} (asserted ≥ {min_rate}); errors {lo:.2}–{hi:.2} times those at ν = 0.3 on every level (asserted < {max_ratio})"
+        ),
+        "elasticity",
+    );
 }

@@ -10,7 +10,9 @@
 //! The shipped cases are run as they are, or with the mesh or step count changed.
 
 mod common;
-use common::{mesh_path, repo, run_case_in, shipped_case, shipped_case_on, tempdir};
+use common::{
+    mesh_path, repo, run_case_in, shipped_case, shipped_case_on, tempdir, validation_row,
+};
 use serde_json::{Value, json};
 use stickslip::analytic::cattaneo::CattaneoMindlin;
 use stickslip::analytic::dcm::DoubleCm;
@@ -89,10 +91,11 @@ fn cattaneo_mindlin_on_the_finest_mesh() {
         f.c / h.a,
         c / h.a
     );
-    assert!((f.c / c - 1.0).abs() < 0.01, "c = {} vs {c}", f.c);
-    assert!(e < 0.02, "shear deviation {e}");
+    let (c_tol, q_tol, p_tol) = (0.01, 0.02, 0.01);
+    assert!((f.c / c - 1.0).abs() < c_tol, "c = {} vs {c}", f.c);
+    assert!(e < q_tol, "shear deviation {e}");
     assert!(
-        p_dev < 0.01,
+        p_dev < p_tol,
         "pressure deviation after tangential loading {p_dev}"
     );
     // The pressure before the tangential load (normal stage only) is the same to round-off.
@@ -107,7 +110,24 @@ fn cattaneo_mindlin_on_the_finest_mesh() {
             .fold(0.0, f64::max)
             / h.p0;
     println!("pressure change during tangential loading: {change:.2e} p0");
-    assert!(change < 0.005, "pressure changed by {change} p0");
+    // Measured 1.4e-4 p0: discretisation (β = 0: the continuum pressure does not change).
+    let change_tol = 3e-4;
+    assert!(change < change_tol, "pressure changed by {change} p0");
+    validation_row(
+        "200-cattaneo-mindlin",
+        "Cattaneo–Mindlin, μ = 0.2, Q = 0.936 N/mm, L5",
+        "C–M",
+        &format!(
+            "c/a = {:.4} vs {:.4} ({:+.1} %; asserted within {:.0} %); max |q − q_CM| = {:.1} % of μp0 outside two elements of |x| = c and of the contact edge (asserted < {:.0} %); max |p − p_H| = {p_dev:.4} p0 over |x| ≤ 0.95a after the tangential load (asserted < {p_tol}); pressure changes by {change:.1e} p0 during tangential loading (asserted < {change_tol:.0e})",
+            f.c / h.a,
+            c / h.a,
+            100.0 * (f.c / c - 1.0),
+            100.0 * c_tol,
+            100.0 * e,
+            100.0 * q_tol
+        ),
+        "friction_contact",
+    );
 }
 
 /// §3: a step law whose Δ is far below the element size gives Cattaneo–Mindlin with f = f_d.
@@ -143,9 +163,25 @@ fn abrupt_transition_gives_cattaneo_mindlin_with_the_dynamic_coefficient() {
     println!(
         "abrupt: c/c_CM(f_d) − 1 on L3, L4, L5: {errs:?}; L5 max |q − q_CM|/(f_d p0) = {e:.4}"
     );
+    let (c_tol, q_tol) = (0.05, 0.02);
     assert!(errs[0] > errs[1] && errs[1] > errs[2], "{errs:?}");
-    assert!(errs[2].abs() < 0.05, "{errs:?}");
-    assert!(e < 0.02, "{e}");
+    assert!(errs[2].abs() < c_tol, "{errs:?}");
+    assert!(e < q_tol, "{e}");
+    validation_row(
+        "210-abrupt",
+        "abrupt transition (§3): step law, Δ = 1e-9 mm",
+        "C–M with f_d",
+        &format!(
+            "c error {:+.1} %, {:+.1} %, {:+.1} % on L3, L4, L5 (asserted to fall, and within {:.0} % on L5; the mesh caps the edge singularity that would shrink the stick zone; it vanishes as h → 0); traction within {:.1} % of f_d p0 (asserted {:.0} %)",
+            100.0 * errs[0],
+            100.0 * errs[1],
+            100.0 * errs[2],
+            100.0 * c_tol,
+            100.0 * e,
+            100.0 * q_tol
+        ),
+        "friction_contact",
+    );
 }
 
 /// Fig. 2 (ramp, Λ = 0.05, Q = 0.8 f_d P) as shipped: c within 2 % of the double C–M c, and
@@ -176,9 +212,29 @@ fn figure_2_matches_double_cattaneo_mindlin() {
         f.b / h.a,
         s.b / h.a
     );
-    assert!((f.c / s.c - 1.0).abs() < 0.02, "c = {} vs {}", f.c, s.c);
-    assert!(e.is_finite() && e <= 0.03, "traction deviation {e}");
-    assert!((f.b / s.b - 1.0).abs() < 0.03, "b = {} vs {}", f.b, s.b);
+    let (c_tol, q_tol, b_tol) = (0.02, 0.03, 0.03);
+    assert!((f.c / s.c - 1.0).abs() < c_tol, "c = {} vs {}", f.c, s.c);
+    assert!(e.is_finite() && e <= q_tol, "traction deviation {e}");
+    assert!((f.b / s.b - 1.0).abs() < b_tol, "b = {} vs {}", f.b, s.b);
+    validation_row(
+        "220-fig2",
+        "Fig. 2: ramp, Λ = 0.05, Q = 0.8 f_d P, L5",
+        "double C–M",
+        &format!(
+            "c/a = {:.4} vs {:.4} ({:+.1} %; asserted within {:.0} %), b/a = {:.4} vs {:.4} ({:+.1} %; asserted within {:.0} %); traction within {:.1} % of f_d p0 outside the transition zone (asserted {:.0} %)",
+            f.c / h.a,
+            s.c / h.a,
+            100.0 * (f.c / s.c - 1.0),
+            100.0 * c_tol,
+            f.b / h.a,
+            s.b / h.a,
+            100.0 * (f.b / s.b - 1.0),
+            100.0 * b_tol,
+            100.0 * e,
+            100.0 * q_tol
+        ),
+        "friction_contact",
+    );
 }
 
 /// Fig. 3 (Λ = 0.277, Q = 0.9 f_d P): ramp and step laws give stick zones within 2 % of each
@@ -209,13 +265,40 @@ fn figure_3_ramp_and_step_agree() {
         step.c / h.a,
         s.c / h.a
     );
-    assert!((ramp.c / step.c - 1.0).abs() < 0.02);
-    assert!((ramp.c / s.c - 1.0).abs() < 0.06);
-    assert!((step.c / s.c - 1.0).abs() < 0.06);
-    assert!(rms < 0.06, "ramp and step differ by {rms} f_d p0 (RMS)");
+    let (pair_tol, dcm_tol, rms_tol) = (0.02, 0.06, 0.06);
+    let (d_ramp, d_step) = (ramp.c / s.c - 1.0, step.c / s.c - 1.0);
+    let d_pair = ramp.c / step.c - 1.0;
+    assert!(d_pair.abs() < pair_tol);
+    assert!(d_ramp.abs() < dcm_tol);
+    assert!(d_step.abs() < dcm_tol);
+    assert!(rms < rms_tol, "ramp and step differ by {rms} f_d p0 (RMS)");
+    // The target for the stick zone against the closed form.
+    let target = 0.02;
+    let verdict = if d_ramp.abs() > target || d_step.abs() > target {
+        format!("**outside the {:.0} % target**", 100.0 * target)
+    } else {
+        format!("within the {:.0} % target", 100.0 * target)
+    };
+    validation_row(
+        "230-fig3",
+        "Fig. 3: ramp and step, Λ = 0.277, Q = 0.9 f_d P, L5",
+        "double C–M",
+        &format!(
+            "c/a = {:.3} (ramp), {:.3} (step) vs {:.3}: {:+.1} % and {:+.1} % (asserted within {:.0} %), {verdict}; ramp and step within {:.1} % of each other (asserted {:.0} %), RMS traction difference {rms:.2} f_d p0 (asserted < {rms_tol})",
+            ramp.c / h.a,
+            step.c / h.a,
+            s.c / h.a,
+            100.0 * d_ramp,
+            100.0 * d_step,
+            100.0 * dcm_tol,
+            100.0 * d_pair.abs(),
+            100.0 * pair_tol
+        ),
+        "friction_contact",
+    );
 }
 
-/// Halving the load step changes the Fig. 2 traction by less than 0.5 % of f_d p0.
+/// Halving the load step changes the Fig. 2 traction by no more than the Newton tolerance.
 #[test]
 fn figure_2_is_converged_in_the_step_count() {
     let h = hertz();
@@ -230,8 +313,19 @@ fn figure_2_is_converged_in_the_step_count() {
             .map(|(x, y)| (x - y).abs())
             .fold(0.0, f64::max)
             / (0.1 * h.p0);
-    println!("Fig. 2 on L4, 40 vs 80 tangential steps: max |Δq|/(f_d p0) = {d:.5}");
-    assert!(d < 0.005, "{d}");
+    println!("Fig. 2 on L4, 40 vs 80 tangential steps: max |Δq|/(f_d p0) = {d:.2e}");
+    // Measured 6.3e-11: the Newton tolerance, not the path.
+    let tol = 3e-10;
+    assert!(d < tol, "{d}");
+    validation_row(
+        "260-step-count",
+        "load-step count, Fig. 2 on L4, 40 vs 80 steps",
+        "—",
+        &format!(
+            "tractions equal to {d:.0e} f_d p0 (asserted < {tol:.0e}): with monotonic loading the slip-weakening state is path-independent"
+        ),
+        "friction_contact",
+    );
 }
 
 /// Finite-difference check of the Jacobian with slip-dependent μ: at an iterate inside a step
@@ -245,25 +339,41 @@ fn newton_jacobian_matches_finite_differences() {
     // The model does not depend on the law (each solve takes it): built once.
     let (model, opt) = fig2_on_l1();
     // Force control, and slip control (the pilot's x equation replaced by the mean-slip row).
-    for method in [
-        Method::Newton,
-        Method::Penalty,
-        Method::AugmentedLagrangian,
-    ] {
+    // The largest deviation per law (ramp, exponential) over the methods and controls.
+    let mut worst = [0.0f64; 2];
+    for method in [Method::Newton, Method::Penalty, Method::AugmentedLagrangian] {
         for slip_drive in [false, true] {
-            jacobian_against_finite_differences(&model, &opt, method, slip_drive);
+            let w = jacobian_against_finite_differences(&model, &opt, method, slip_drive);
+            for (a, b) in worst.iter_mut().zip(w) {
+                *a = a.max(b);
+            }
         }
     }
+    validation_row(
+        "270-jacobian",
+        "Newton Jacobian with ramp and exponential μ(u), under force control and under slip control (the mean-slip row)",
+        "central finite differences",
+        &format!(
+            "max deviation {:.1e} (ramp), {:.1e} (exponential) of the largest entry over Newton, penalty and augmented Lagrangian (asserted < {JACOBIAN_TOL:.0e})",
+            worst[0], worst[1]
+        ),
+        "friction_contact",
+    );
 }
 
+/// Bound on |J_FD − J|/max|J| (the pilot rows' deviations counted at 1 %).
+const JACOBIAN_TOL: f64 = 1e-7;
+
 /// The Jacobian of one Newton iteration of `method` against central finite differences of its
-/// residual, at an iterate moved off a solution with transition nodes (μ′ ≠ 0).
+/// residual, at an iterate moved off a solution with transition nodes (μ′ ≠ 0). Returns the
+/// largest deviation for the ramp and for the exponential law, each asserted here.
 fn jacobian_against_finite_differences(
     model: &stickslip::model::Model,
     opt: &stickslip::contact::solver::Options,
     method: stickslip::contact::solver::Method,
     slip_drive: bool,
-) {
+) -> Vec<f64> {
+    let mut out = Vec::new();
     use stickslip::case::Control;
     use stickslip::contact::solver::{Iterate, PilotDrive, State, Status};
     use stickslip::friction::FrictionLaw;
@@ -363,8 +473,10 @@ fn jacobian_against_finite_differences(
             x0.len(),
             r0.iter().fold(0.0f64, |m, v| m.max(v.abs()))
         );
-        assert!(worst < 1e-7, "{method:?}: {worst} at {worst_at:?}");
+        assert!(worst < JACOBIAN_TOL, "{method:?}: {worst} at {worst_at:?}");
+        out.push(worst);
     }
+    out
 }
 
 /// Why Fig. 3's stick zone sits 3–4 % below eq. (qx2CM): the double Cattaneo–Mindlin solution
@@ -405,10 +517,30 @@ fn figure_3_with_the_law_implied_by_double_cattaneo_mindlin() {
         ramp.c / h.a,
         100.0 * (ramp.c / s.c - 1.0),
     );
-    assert!((f.c / s.c - 1.0).abs() < 0.02, "c {} vs {}", f.c, s.c);
-    assert!(dq < 0.03, "traction off by {dq} f_d p0");
+    let (c_tol, q_tol) = (0.02, 0.03);
+    assert!((f.c / s.c - 1.0).abs() < c_tol, "c {} vs {}", f.c, s.c);
+    assert!(dq < q_tol, "traction off by {dq} f_d p0");
     // The ramp's deviation is then a property of the closed form, not of the FE.
     assert!((f.c / s.c - 1.0).abs() < (ramp.c / s.c - 1.0).abs());
+    validation_row(
+        "240-fig3-implied-law",
+        &format!(
+            "Fig. 3 with the friction law the double C–M solution implies (paper Fig. 1: f = q/p against the slip over c ≤ x ≤ b, {}-row table)",
+            table.len()
+        ),
+        "double C–M",
+        &format!(
+            "c/a = {:.4} vs {rmc:.4} (**{:+.2} %**; asserted within {:.0} %); max |q − q_2CM| = {:.1} % of f_d p0 including the transition zone (outside two elements of c, b and the contact edge; asserted < {:.0} %); with the ramp law on the same grid {:+.1} % and {:.0} % (the ramp's traction differs inside the transition zone): the Fig. 3 gap is the closed form's shape approximation",
+            f.c / h.a,
+            100.0 * (f.c / s.c - 1.0),
+            100.0 * c_tol,
+            100.0 * dq,
+            100.0 * q_tol,
+            100.0 * (ramp.c / s.c - 1.0),
+            100.0 * dq_ramp
+        ),
+        "friction_contact",
+    );
 }
 
 /// The cached structured solve (`LuCache::solve_rows`: a Cholesky factor of the Delassus block

@@ -4,15 +4,20 @@
 //! (Johnson, *Contact Mechanics*, eq. 5.75):
 //!   σ_x = −p0 [(1 + 2z²/a²)/√(1 + z²/a²) − 2z/a],   σ_z = −p0/√(1 + z²/a²),
 //! with the maximum shear (σ_x − σ_z)/2 = 0.300 p0 at z = 0.78a.
-//! Tolerance: 1 % of p0 at every axis node with depth ≤ 3a.
+//! Tolerance: [`BLOCK_TOL`] of p0 at every axis point with depth ≤ 3a.
 
 mod common;
-use common::{add_edge_traction, repo, solve_linear_with};
+use common::{add_edge_traction, repo, solve_linear_with, validation_row};
 use stickslip::case::{Case, Control};
 use stickslip::model::Model;
 
 const P0: f64 = 9.351;
 const A: f64 = 0.6808;
+/// Largest |σ − σ_McEwen|/p0 on the axis of the block (measured 2.3e-4; the far-field
+/// tractions are exact to about 3e-4).
+const BLOCK_TOL: f64 = 5e-4;
+/// |τ_max − τ_max,McEwen|/p0, both taken over the same axis depths (measured 1.8e-5).
+const TAU_TOL: f64 = 4e-5;
 
 pub fn mcewen(z: f64) -> (f64, f64) {
     let r = z / A;
@@ -45,7 +50,7 @@ fn axis_stresses(case_json: &str, mesh: &std::path::Path, y_top: f64) -> Vec<(f6
 /// loads are self-equilibrated). With free sides and a clamped bottom instead, σ_xx carries
 /// a uniform offset of 1.2 % of p0 (a finite-block effect, measured while writing this test).
 #[test]
-fn hertz_traction_on_a_large_block_matches_mcewen_within_1_percent() {
+fn hertz_traction_on_a_large_block_matches_mcewen() {
     let mesh = stickslip::mesh::gmsh::read(&repo().join("meshes/block_hertz.msh")).unwrap();
     let mat = stickslip::elasticity::Material { e: 200.0, nu: 0.3 };
     let p = std::f64::consts::PI * A * P0 / 2.0;
@@ -116,7 +121,8 @@ fn hertz_traction_on_a_large_block_matches_mcewen_within_1_percent() {
         })
         .collect();
     let mut worst: f64 = 0.0;
-    let mut tau_max = (0.0, 0.0);
+    // The largest shear (σ_x − σ_z)/2 on the axis, of the FE and of McEwen at the same depths.
+    let (mut tau_max, mut tau_exact) = ((0.0, 0.0), (0.0, 0.0));
     for &(z, sxx, syy) in &near {
         let (ex, ez) = mcewen(z);
         worst = worst.max((sxx - ex).abs().max((syy - ez).abs()) / P0);
@@ -124,22 +130,38 @@ fn hertz_traction_on_a_large_block_matches_mcewen_within_1_percent() {
         if tau > tau_max.0 {
             tau_max = (tau, z);
         }
+        let tau_e = 0.5 * (ex - ez).abs();
+        if tau_e > tau_exact.0 {
+            tau_exact = (tau_e, z);
+        }
     }
+    let tau_dev = (tau_max.0 - tau_exact.0).abs() / P0;
     println!(
-        "max |σ − σ_McEwen|/p0 on the axis, z ≤ 3a: {worst:.4}; τ_max = {:.4} p0 at z = {:.3} a",
+        "max |σ − σ_McEwen|/p0 on the axis, z ≤ 3a: {worst:.2e}; τ_max = {:.5} p0 at z = {:.3} a (McEwen at the same depths: {:.5} p0 at {:.3} a; difference {tau_dev:.1e} p0)",
         tau_max.0 / P0,
-        tau_max.1 / A
+        tau_max.1 / A,
+        tau_exact.0 / P0,
+        tau_exact.1 / A
     );
-    assert!(worst < 0.01, "axis stresses deviate by {worst:.4} p0");
+    assert!(worst < BLOCK_TOL, "axis stresses deviate by {worst:.4} p0");
+    assert!(tau_dev < TAU_TOL, "τ_max = {} p0", tau_max.0 / P0);
+    let (z_ref, z_tol) = (0.78, 0.06);
     assert!(
-        (tau_max.0 / P0 - 0.300).abs() < 0.005,
-        "τ_max = {} p0",
-        tau_max.0 / P0
-    );
-    assert!(
-        (tau_max.1 / A - 0.78).abs() < 0.06,
+        (tau_max.1 / A - z_ref).abs() < z_tol,
         "depth of τ_max = {} a",
         tau_max.1 / A
+    );
+    validation_row(
+        "050-mcewen-block",
+        "Hertzian traction on a 120a × 60a block, axis stresses for z ≤ 3a",
+        "McEwen (Johnson eq. 5.75)",
+        &format!(
+            "max deviation {worst:.1e} p0 (asserted < {BLOCK_TOL:.0e} p0); τ_max = {:.4} p0 at z ≈ {:.2}a, McEwen's at the same depths {:.4} p0 (asserted within {TAU_TOL:.0e} p0; depth within {z_tol}a of {z_ref}a)",
+            tau_max.0 / P0,
+            tau_max.1 / A,
+            tau_exact.0 / P0
+        ),
+        "hertz_halfspace",
     );
 }
 
@@ -160,5 +182,15 @@ fn hertz_traction_on_the_half_cylinder_reports_the_finite_body_effect() {
         .fold(0.0, f64::max);
     println!("half-cylinder: max |σ − σ_McEwen|/p0 on the axis, z ≤ 3a: {worst:.4}");
     // The finite body changes the axis stresses by a few per cent of p0, not by tens.
-    assert!(worst > 0.0 && worst < 0.1, "{worst}");
+    let tol = 0.1;
+    assert!(worst > 0.0 && worst < tol, "{worst}");
+    validation_row(
+        "051-mcewen-cylinder",
+        "same load on the lower half-cylinder of VM272",
+        "McEwen",
+        &format!(
+            "max deviation {worst:.3} p0 (asserted < {tol} p0): the finite-body effect the contact runs will meet"
+        ),
+        "hertz_halfspace",
+    );
 }

@@ -5,11 +5,18 @@
 //! every master edge. Done on the VM272 L1 arcs with the common normal and with local normals.
 
 mod common;
-use common::repo;
+use common::{repo, validation_row};
 use stickslip::contact::{self, mortar};
 use stickslip::loads::EdgeOrientation;
 use stickslip::mesh::gmsh;
 use stickslip::shapes::lin3;
+
+/// Bounds on the largest relative differences against the brute-force integrals: the weights
+/// carry the midpoint rule's O(N⁻²) error (measured 6.3e-8), Ĝ U and T̂ U (ratios of two such
+/// integrals) little more than round-off (measured 3.6e-12 and 2.4e-11).
+const WEIGHT_TOL: f64 = 1e-7;
+const GAP_TOL: f64 = 2e-11;
+const TANGENT_TOL: f64 = 1e-10;
 
 fn field(x: [f64; 2]) -> [f64; 2] {
     [
@@ -28,6 +35,8 @@ fn mortar_rows_match_brute_force_integrals() {
     let orient = EdgeOrientation::new(&mesh, &tris);
     let slave = contact::oriented_edges(&mesh, &orient, "lower_arc").unwrap();
     let master = contact::oriented_edges(&mesh, &orient, "upper_arc").unwrap();
+    // Largest differences over both normals: weights, Ĝ U, T̂ U.
+    let mut largest = [0.0f64; 3];
     for common in [true, false] {
         let pair = contact::build_pair(
             &mesh,
@@ -120,8 +129,24 @@ fn mortar_rows_match_brute_force_integrals() {
             "common normal {common}: {ns} slave nodes; max relative differences: weights {ew:.1e}, Ĝ U {eg:.1e}, T̂ U {et:.1e}"
         );
         // The brute-force midpoint rule carries an O(N⁻²) error and a kink per segment end.
-        assert!(ew < 1e-5 && eg < 1e-5 && et < 1e-5, "{ew} {eg} {et}");
+        assert!(
+            ew < WEIGHT_TOL && eg < GAP_TOL && et < TANGENT_TOL,
+            "{ew} {eg} {et}"
+        );
+        for (l, e) in largest.iter_mut().zip([ew, eg, et]) {
+            *l = l.max(e);
+        }
     }
+    validation_row(
+        "110-mortar-operator",
+        "mortar operator (weights, Ĝ U, T̂ U for two different smooth fields on the bodies), common and local normals",
+        "brute-force integrals: 4000 samples per slave edge, each projected by searching every master edge",
+        &format!(
+            "weights {:.0e}, Ĝ U {:.0e}, T̂ U {:.0e} relative (asserted < {WEIGHT_TOL:.0e}, {GAP_TOL:.0e}, {TANGENT_TOL:.0e})",
+            largest[0], largest[1], largest[2]
+        ),
+        "mortar_operator",
+    );
 }
 
 /// Every node of the candidate zone carries a contact unknown, on every level of the ladder and
@@ -139,6 +164,9 @@ fn the_mortar_covers_the_whole_candidate_zone() {
         ("vm272_L5.msh", None),
         ("vm272_L5.msh", Some(0.3)),
     ];
+    let (mut nodes, mut coverage) = (0, 0.0f64);
+    // Measured 6.3e-11 (the segment ends come from iterative projections).
+    let cov_tol = 2e-10;
     for (file, gap) in cases {
         let mesh = gmsh::read(&repo().join("meshes").join(file)).unwrap();
         let tris: Vec<usize> = ["lower_body", "upper_body"]
@@ -178,11 +206,27 @@ fn the_mortar_covers_the_whole_candidate_zone() {
         assert_eq!(zone_x, mortar_x, "{file}");
         // Each zone edge is covered over its whole length (the master face is longer).
         for (e, cov) in pair.zone_edges.iter().zip(&m.coverage) {
-            assert!((cov - 2.0).abs() < 1e-9, "{file}: edge {e:?} covered {cov}");
+            assert!(
+                (cov - 2.0).abs() < cov_tol,
+                "{file}: edge {e:?} covered {cov}"
+            );
+            coverage = coverage.max((cov - 2.0).abs());
         }
         assert!(pair.face_ends.is_empty(), "{file}");
         for n in &pair.rim_nodes {
             assert!(with_unknown.contains(n), "{file}: rim node {n}");
         }
+        nodes += zone_nodes.len();
     }
+    println!("largest |coverage − 2| of a zone edge: {coverage:.2e}");
+    validation_row(
+        "100-mortar-coverage",
+        "mortar coverage: every candidate slave edge facing the master face is fully integrated, including where the initial gap exceeds ten elements (L0, L3 with a gap of 0.5 mm, L4, L5, L5 with a gap of 0.3 mm)",
+        "search against every master edge with unlimited reach",
+        &format!(
+            "all {nodes} zone nodes of the {} cases carry a multiplier, the mortar reaches as far as the zone on each; every zone edge covered over its whole length (parametric length 2 to {coverage:.0e}, asserted < {cov_tol:.0e}); no face ends",
+            cases.len()
+        ),
+        "mortar_operator",
+    );
 }

@@ -7,7 +7,7 @@
 //!   stick zone at the same Q.
 
 mod common;
-use common::{run_case, shipped_case, shipped_case_on};
+use common::{run_case, shipped_case, shipped_case_on, validation_row};
 use serde_json::{Value, json};
 
 fn run(name: &str, stage: Value) -> (i32, String, Vec<Vec<f64>>, Value) {
@@ -140,13 +140,14 @@ fn slip_control_traces_the_softening_branch() {
     // converging to one bisection width (the tangential step 0.03 halved 12 times: 7.3e-6);
     // that is a little below the limit point itself, where the Jacobian becomes singular and
     // convergence slows: measured 3e-5 (0.003 %) below the slip-controlled peak. Slip control
-    // samples the curve, ΔQ ≈ 2e-4 per step at the top.
+    // samples the curve, ΔQ ≈ 2e-4 per step at the top (measured |q_peak − q_force| = 3.2e-5).
+    let (fail_tol, peak_tol) = (5e-5, 6e-5);
     assert!(
-        q_peak < q_fail + 5e-5,
+        q_peak < q_fail + fail_tol,
         "slip-controlled peak {q_peak} above the load without equilibrium {q_fail}"
     );
     assert!(
-        (q_peak - q_force).abs() < 3e-4,
+        (q_peak - q_force).abs() < peak_tol,
         "peaks {q_peak} vs {q_force}"
     );
     // Past the peak: Q falls and c shrinks over several steps …
@@ -209,6 +210,17 @@ fn slip_control_traces_the_softening_branch() {
     println!(
         "|Q_FE − Q_DCM(c_FE)|/(f_d P): ≤ {worst:.4} (c ≤ 0.6a), ≤ {worst_soft:.4} past the peak"
     );
-    assert!(worst < 0.015, "{worst}");
-    assert!(worst_soft < 0.003, "{worst_soft}");
+    let (dcm_tol, soft_tol) = (0.015, 0.003);
+    assert!(worst < dcm_tol, "{worst}");
+    assert!(worst_soft < soft_tol, "{worst_soft}");
+    validation_row(
+        "250-onset",
+        "slip control through the peak, Fig. 2's law, L4",
+        "force control; double C–M Q(c)",
+        &format!(
+            "peak {q_peak:.6} vs {q_force:.6} f_d P (force control; asserted within {peak_tol:.0e}, and at most {fail_tol:.0e} above {q_fail:.6}, the load at which force control found no equilibrium); c(Q) within the slip-control sampling of the force-controlled c before the peak ({compared} loads); Q(c) within {worst:.3} f_d P of double C–M for c ≤ 0.6a and {worst_soft:.4} f_d P past the peak (asserted {dcm_tol} and {soft_tol}); Q and c fall over the {} steps past the peak, and δ turns back",
+            after.len() - 1
+        ),
+        "onset",
+    );
 }

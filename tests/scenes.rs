@@ -24,7 +24,7 @@
 //! worker threads, each run single-threaded and killed after `RUN_TIMEOUT`.
 
 mod common;
-use common::{Table, repo, tempdir};
+use common::{Table, repo, tempdir, validation_row};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -561,11 +561,15 @@ fn random_scenes_match_the_closed_forms() {
     println!("|{}", "---|".repeat(17));
     let mut failures = Vec::new();
     let mut worst = [0.0f64; 7];
+    // β ≠ 0: the least-squares k of Δp0 = k β² (sums of Δp0 β² and β⁴), the largest |β|, and the
+    // largest slip of the normal stage over Δ of the slip-weakening scenes.
+    let (mut fit, mut beta_max, mut slip_max) = ((0.0f64, 0.0f64), 0.0f64, 0.0f64);
     for (s, o) in scenes.iter().zip(&results) {
         let h = s.hertz();
         let beta = s.beta();
         let mut fail = |msg: String| failures.push(format!("scene {}: {msg}", s.id));
         let (da, dp) = (rel(o.a, h.a), rel(o.p0, h.p0));
+        beta_max = beta_max.max(beta.abs());
         let (a_lim, p_lim) = (A_TOL + A_BETA2 * beta * beta, P_TOL + P_BETA2 * beta * beta);
         let b0 = beta.abs() < 1e-12;
         let (mut c_cm, mut q_jkr) = (f64::NAN, f64::NAN);
@@ -626,6 +630,7 @@ fn random_scenes_match_the_closed_forms() {
                         ));
                     }
                 } else {
+                    slip_max = slip_max.max(o.slip_normal / s.delta().unwrap());
                     // The JKR limit assumes β = 0: μ = f_s everywhere until Q acts. With β ≠ 0
                     // the normal load already slips the contact edges (measured up to 4.2 Δ,
                     // μ there down to ≈ f_d), so only the bounds of any law with
@@ -639,6 +644,10 @@ fn random_scenes_match_the_closed_forms() {
                     }
                 }
             }
+        }
+        if !b0 {
+            fit.0 += dp * beta * beta;
+            fit.1 += beta.powi(4);
         }
         let k = if b0 { 0 } else { 2 };
         worst[k] = worst[k].max(da.abs());
@@ -730,6 +739,33 @@ fn random_scenes_match_the_closed_forms() {
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     let _ = std::fs::remove_dir_all(&root);
+    let pct = |v: f64| format!("{:.2} %", 100.0 * v);
+    validation_row(
+        "300-scenes",
+        &format!(
+            "{} random scenes (fixed seed; `meshes/scene.py`): two cylinders R1 ≠ R2 or a cylinder on a flat; identical, dissimilar β = 0 and β ≠ 0 pairs (|β| ≤ {beta_max:.3}); Coulomb μ with Q < μP, or ramp/step/exponential laws with Λ = 0.03–0.06, s0 resolved (h ≤ s0/2), loaded past the peak; every self-check ok",
+            scenes.len()
+        ),
+        "Hertz a, p0 (1/R = 1/R1 + 1/R2, E*); C–M c (β = 0); JKR Q_max (β = 0)",
+        &format!(
+            "β = 0: a within {}, p0 within {} (asserted {}, {}); c within {:.2} h (asserted {C_TOL} h); Q_max within {} of JKR for ramp/exponential, {} for step (asserted {}, {}). β ≠ 0: p0 ≈ {:.1} β² above Hertz (least squares; the normal–tangential coupling; β ≠ 0 |Δa| up to {}, |Δp0| up to {}), asserted within {} + {P_BETA2} β² (a: {} + {A_BETA2} β²); JKR does not apply there (the normal load already slips the edges by up to {slip_max:.1}Δ): f_d P < Q_max < f_s P",
+            pct(worst[0]),
+            pct(worst[1]),
+            pct(A_TOL),
+            pct(P_TOL),
+            worst[4],
+            pct(worst[5]),
+            pct(worst[6]),
+            pct(Q_TOL),
+            pct(Q_TOL_STEP),
+            fit.0 / fit.1,
+            pct(worst[2]),
+            pct(worst[3]),
+            pct(P_TOL),
+            pct(A_TOL)
+        ),
+        "scenes",
+    );
 }
 
 /// `meshes/scene.py` itself: the same options give the same bytes; the groups and tags are

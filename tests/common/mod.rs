@@ -40,6 +40,68 @@ pub fn stickslip(args: &[&str]) -> (i32, String, String) {
     )
 }
 
+/// Whether `VALIDATION_WRITE_DOC` asks the tests to write their rows of the README's
+/// validation table (set, and neither empty nor `0`).
+pub fn validation_write_doc() -> bool {
+    std::env::var_os("VALIDATION_WRITE_DOC").is_some_and(|v| !v.is_empty() && v != "0")
+}
+
+/// `v` to one significant digit in scientific notation (`4e-12`), or `0` when it is zero: for
+/// round-off-level differences in the validation table.
+pub fn sci(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else {
+        format!("{v:.0e}")
+    }
+}
+
+/// One row of the README's validation table (`| check | reference | result | test |`), written
+/// to `docs/validation/<key>.md` when `VALIDATION_WRITE_DOC` is set, and nothing otherwise.
+///
+/// `key` starts with a three-digit order prefix (`010-patch`): sorting the file names gives
+/// the row order of the table, which `post/validation_table.py` assembles into README.md and
+/// docs/validation.md. `test` is the name of the test binary (`tests/<test>.rs`) that calls this
+/// right after the assertions the row reports; `result` is formatted from the same variables
+/// and bounds those assertions use. Cells are plain text: `|` is escaped here, line breaks
+/// become spaces. The file is written to a temporary name and renamed, so it is whole or absent.
+pub fn validation_row(key: &str, check: &str, reference: &str, result: &str, test: &str) {
+    if !validation_write_doc() {
+        return;
+    }
+    let (prefix, name) = key.split_at(key.find('-').unwrap_or(0));
+    assert!(
+        prefix.len() == 3
+            && prefix.bytes().all(|b| b.is_ascii_digit())
+            && name.len() > 1
+            && name[1..]
+                .bytes()
+                .all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'-'),
+        "validation row key `{key}`: expected NNN-name (lower case, digits, dashes)"
+    );
+    assert!(
+        repo().join("tests").join(format!("{test}.rs")).is_file(),
+        "validation row {key}: no test binary tests/{test}.rs"
+    );
+    let cell = |s: &str| {
+        s.split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ")
+            .replace('|', "\\|")
+    };
+    let line = format!(
+        "| {} | {} | {} | `{test}` |\n",
+        cell(check),
+        cell(reference),
+        cell(result)
+    );
+    let dir = repo().join("docs/validation");
+    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = dir.join(format!(".{key}.md.tmp{}", std::process::id()));
+    std::fs::write(&tmp, line).unwrap();
+    std::fs::rename(&tmp, dir.join(format!("{key}.md"))).unwrap();
+}
+
 /// The path of `meshes/NAME` as a JSON string, for a case's `"mesh"`.
 /// Makes sure `meshes/<stem>.msh` exists, building it with `meshes/generate.py <stem>` (gmsh
 /// from PyPI) when it does not. Panics, never skips, when gmsh is missing: CI installs it.
