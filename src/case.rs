@@ -501,19 +501,29 @@ impl Case {
 
     /// Checks every value against its allowed range; the error names the key.
     pub fn validate(&self, path: &str) -> Result<(), CaseError> {
-        let bad = |key: String, value: String, why: &str| CaseError::Value {
-            path: path.into(),
-            key,
-            value,
-            why: why.into(),
-        };
-        let finite = |key: String, v: f64| -> Result<(), CaseError> {
-            if v.is_finite() {
-                Ok(())
-            } else {
-                Err(bad(key, format!("{v}"), "must be a finite number"))
-            }
-        };
+        self.validate_bodies(path)?;
+        self.validate_supports(path)?;
+        for (i, t) in self.tractions.iter().enumerate() {
+            validate_traction(path, i, t)?;
+        }
+        self.validate_stages(path)?;
+        if let Some(c) = &self.contact {
+            validate_contact(path, c)?;
+        }
+        if self.output.every == 0 {
+            return Err(invalid(
+                path,
+                "output.every".into(),
+                "0".into(),
+                "must be ≥ 1",
+            ));
+        }
+        Ok(())
+    }
+
+    /// At least one body; E > 0, −1 < ν < 0.5 and no group listed twice.
+    fn validate_bodies(&self, path: &str) -> Result<(), CaseError> {
+        let bad = |key: String, value: String, why: &str| invalid(path, key, value, why);
         if self.bodies.is_empty() {
             return Err(bad(
                 "bodies".into(),
@@ -544,9 +554,15 @@ impl Case {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// Every support fixes `ux`, `uy` or both, to finite values.
+    fn validate_supports(&self, path: &str) -> Result<(), CaseError> {
         for (i, s) in self.supports.iter().enumerate() {
             if s.ux.is_none() && s.uy.is_none() {
-                return Err(bad(
+                return Err(invalid(
+                    path,
                     format!("supports[{i}]"),
                     s.group.clone(),
                     "give `ux`, `uy` or both",
@@ -554,69 +570,18 @@ impl Case {
             }
             for (k, v) in [("ux", s.ux), ("uy", s.uy)] {
                 if let Some(v) = v {
-                    finite(format!("supports[{i}].{k}"), v)?;
+                    check_finite(path, format!("supports[{i}].{k}"), v)?;
                 }
             }
         }
-        for (i, t) in self.tractions.iter().enumerate() {
-            let need = |k: &str, v: Option<f64>| -> Result<f64, CaseError> {
-                let v = v.ok_or_else(|| {
-                    bad(
-                        format!("tractions[{i}].{k}"),
-                        "missing".into(),
-                        "required for this kind",
-                    )
-                })?;
-                finite(format!("tractions[{i}].{k}"), v)?;
-                Ok(v)
-            };
-            let forbid = |k: &str, v: Option<f64>| -> Result<(), CaseError> {
-                match v {
-                    Some(x) => Err(bad(
-                        format!("tractions[{i}].{k}"),
-                        format!("{x}"),
-                        "not used by this kind",
-                    )),
-                    None => Ok(()),
-                }
-            };
-            match t.kind {
-                TractionKind::Uniform => {
-                    need("tx", t.tx.or(Some(0.0)))?;
-                    need("ty", t.ty.or(Some(0.0)))?;
-                    for (k, v) in [("p", t.p), ("p0", t.p0), ("a", t.a), ("x0", t.x0)] {
-                        forbid(k, v)?;
-                    }
-                }
-                TractionKind::Pressure => {
-                    need("p", t.p)?;
-                    for (k, v) in [
-                        ("tx", t.tx),
-                        ("ty", t.ty),
-                        ("p0", t.p0),
-                        ("a", t.a),
-                        ("x0", t.x0),
-                    ] {
-                        forbid(k, v)?;
-                    }
-                }
-                TractionKind::Hertz => {
-                    need("p0", t.p0)?;
-                    let a = need("a", t.a)?;
-                    if a <= 0.0 {
-                        return Err(bad(
-                            format!("tractions[{i}].a"),
-                            format!("{a}"),
-                            "must be > 0",
-                        ));
-                    }
-                    need("x0", t.x0.or(Some(0.0)))?;
-                    for (k, v) in [("tx", t.tx), ("ty", t.ty), ("p", t.p)] {
-                        forbid(k, v)?;
-                    }
-                }
-            }
-        }
+        Ok(())
+    }
+
+    /// At least one stage; step counts in range; pilot controls only with a `pilot`, finite, and
+    /// slip control only on `pilot_x` of a frictional contact.
+    fn validate_stages(&self, path: &str) -> Result<(), CaseError> {
+        let bad = |key: String, value: String, why: &str| invalid(path, key, value, why);
+        let finite = |key: String, v: f64| check_finite(path, key, v);
         if self.stages.is_empty() {
             return Err(bad(
                 "stages".into(),
@@ -662,54 +627,6 @@ impl Case {
                 finite(format!("stages[{i}].traction_scale"), v)?;
             }
         }
-        if let Some(c) = &self.contact {
-            if c.slave == c.master {
-                return Err(bad(
-                    "contact.master".into(),
-                    c.master.clone(),
-                    "must differ from `contact.slave`",
-                ));
-            }
-            for (k, v) in [
-                ("penalty", c.penalty),
-                ("candidate_gap", c.candidate_gap),
-                ("tolerance", c.tolerance),
-            ] {
-                if let Some(v) = v
-                    && !(v > 0.0 && v.is_finite())
-                {
-                    return Err(bad(
-                        format!("contact.{k}"),
-                        format!("{v}"),
-                        "must be > 0 and finite",
-                    ));
-                }
-            }
-            // The friction law whole (preset, shape, f_s ≥ f_d, Λ data) before anything is
-            // read or allocated; Δ from Λ scales with the pair's E*, which does not change
-            // whether the law is valid, so any positive value serves here.
-            if let Some(f) = &c.friction
-                && let Err(why) = f.resolve(1.0)
-            {
-                return Err(bad(
-                    "contact.friction".into(),
-                    serde_json::to_string(f).unwrap_or_default(),
-                    &why.to_string(),
-                ));
-            }
-            if let Some(n) = c.max_iterations
-                && (n == 0 || n > 10_000)
-            {
-                return Err(bad(
-                    "contact.max_iterations".into(),
-                    format!("{n}"),
-                    "must be between 1 and 10000",
-                ));
-            }
-        }
-        if self.output.every == 0 {
-            return Err(bad("output.every".into(), "0".into(), "must be ≥ 1"));
-        }
         Ok(())
     }
 
@@ -724,6 +641,145 @@ impl Case {
     pub fn total_steps(&self) -> usize {
         self.stages.iter().map(|s| s.steps).sum()
     }
+}
+
+/// The error for `key` = `value` in the case file at `path`, with the reason.
+fn invalid(path: &str, key: String, value: String, why: &str) -> CaseError {
+    CaseError::Value {
+        path: path.into(),
+        key,
+        value,
+        why: why.into(),
+    }
+}
+
+/// `v` must be a finite number.
+fn check_finite(path: &str, key: String, v: f64) -> Result<(), CaseError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(
+            path,
+            key,
+            format!("{v}"),
+            "must be a finite number",
+        ))
+    }
+}
+
+/// Traction `i` gives exactly the values its kind uses, finite, with a > 0 for `hertz`.
+fn validate_traction(path: &str, i: usize, t: &TractionSpec) -> Result<(), CaseError> {
+    let need = |k: &str, v: Option<f64>| -> Result<f64, CaseError> {
+        let v = v.ok_or_else(|| {
+            invalid(
+                path,
+                format!("tractions[{i}].{k}"),
+                "missing".into(),
+                "required for this kind",
+            )
+        })?;
+        check_finite(path, format!("tractions[{i}].{k}"), v)?;
+        Ok(v)
+    };
+    let forbid = |k: &str, v: Option<f64>| -> Result<(), CaseError> {
+        match v {
+            Some(x) => Err(invalid(
+                path,
+                format!("tractions[{i}].{k}"),
+                format!("{x}"),
+                "not used by this kind",
+            )),
+            None => Ok(()),
+        }
+    };
+    match t.kind {
+        TractionKind::Uniform => {
+            need("tx", t.tx.or(Some(0.0)))?;
+            need("ty", t.ty.or(Some(0.0)))?;
+            for (k, v) in [("p", t.p), ("p0", t.p0), ("a", t.a), ("x0", t.x0)] {
+                forbid(k, v)?;
+            }
+        }
+        TractionKind::Pressure => {
+            need("p", t.p)?;
+            for (k, v) in [
+                ("tx", t.tx),
+                ("ty", t.ty),
+                ("p0", t.p0),
+                ("a", t.a),
+                ("x0", t.x0),
+            ] {
+                forbid(k, v)?;
+            }
+        }
+        TractionKind::Hertz => {
+            need("p0", t.p0)?;
+            let a = need("a", t.a)?;
+            if a <= 0.0 {
+                return Err(invalid(
+                    path,
+                    format!("tractions[{i}].a"),
+                    format!("{a}"),
+                    "must be > 0",
+                ));
+            }
+            need("x0", t.x0.or(Some(0.0)))?;
+            for (k, v) in [("tx", t.tx), ("ty", t.ty), ("p", t.p)] {
+                forbid(k, v)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The contact: two different groups, positive finite numerical parameters, a friction law that
+/// resolves, and an iteration limit in range.
+fn validate_contact(path: &str, c: &ContactSpec) -> Result<(), CaseError> {
+    let bad = |key: String, value: String, why: &str| invalid(path, key, value, why);
+    if c.slave == c.master {
+        return Err(bad(
+            "contact.master".into(),
+            c.master.clone(),
+            "must differ from `contact.slave`",
+        ));
+    }
+    for (k, v) in [
+        ("penalty", c.penalty),
+        ("candidate_gap", c.candidate_gap),
+        ("tolerance", c.tolerance),
+    ] {
+        if let Some(v) = v
+            && !(v > 0.0 && v.is_finite())
+        {
+            return Err(bad(
+                format!("contact.{k}"),
+                format!("{v}"),
+                "must be > 0 and finite",
+            ));
+        }
+    }
+    // The friction law whole (preset, shape, f_s ≥ f_d, Λ data) before anything is
+    // read or allocated; Δ from Λ scales with the pair's E*, which does not change
+    // whether the law is valid, so any positive value serves here.
+    if let Some(f) = &c.friction
+        && let Err(why) = f.resolve(1.0)
+    {
+        return Err(bad(
+            "contact.friction".into(),
+            serde_json::to_string(f).unwrap_or_default(),
+            &why.to_string(),
+        ));
+    }
+    if let Some(n) = c.max_iterations
+        && (n == 0 || n > 10_000)
+    {
+        return Err(bad(
+            "contact.max_iterations".into(),
+            format!("{n}"),
+            "must be between 1 and 10000",
+        ));
+    }
+    Ok(())
 }
 
 impl schemars::JsonSchema for FrictionSpec {

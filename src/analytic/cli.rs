@@ -1,13 +1,15 @@
 //! `stickslip analytic …`: the closed forms from the command line.
 //!
-//! Scalars are printed as pretty JSON, curves as CSV with a header row. Geometry defaults to
-//! VM272 (two cylinders of 8 mm, E = 200 N/mm², ν = 0.3, P = 10 N/mm); every subcommand that
-//! needs it accepts `--r1 --r2 --e1 --nu1 --e2 --nu2 --load`. See `docs/analytic.md`.
+//! Scalars are printed as pretty JSON, curves as CSV with a header row (the CSV writers are in
+//! `cli_curves.rs`). Geometry defaults to VM272 (two cylinders of 8 mm, E = 200 N/mm², ν = 0.3,
+//! P = 10 N/mm); every subcommand that needs it accepts `--r1 --r2 --e1 --nu1 --e2 --nu2 --load`.
+//! See `docs/analytic.md`.
 
 use super::AnalyticError;
-use super::apparent::{apparent, apparent_curve};
+use super::apparent::apparent;
 use super::cattaneo::CattaneoMindlin;
-use super::dcm::{DoubleCm, Weakening, implied_law_normalized};
+use super::cli_curves;
+use super::dcm::{DoubleCm, Weakening};
 use super::hertz::{Geometry, Hertz, dundurs_beta};
 use super::jkr::{Jkr, JkrCurve, k_ii};
 use super::scales::{self, Scales, s0_over_c, small_scale_ok};
@@ -74,7 +76,8 @@ pub enum CliError {
     Json(#[from] serde_json::Error),
 }
 
-type CliResult<T> = std::result::Result<T, CliError>;
+/// Result of a subcommand runner.
+pub(super) type CliResult<T> = std::result::Result<T, CliError>;
 
 /// Geometry and normal load (VM272 defaults).
 #[derive(Args, Debug, Clone)]
@@ -103,7 +106,8 @@ pub struct GeomArgs {
 }
 
 impl GeomArgs {
-    fn hertz(&self) -> CliResult<Hertz> {
+    /// The Hertz solution of this geometry and load.
+    pub(super) fn hertz(&self) -> CliResult<Hertz> {
         let g = Geometry::from_bodies(self.r1, self.r2, self.e1, self.nu1, self.e2, self.nu2)?;
         Ok(Hertz::new(g, self.load)?)
     }
@@ -122,7 +126,8 @@ pub struct ForceArgs {
 }
 
 impl ForceArgs {
-    fn force(&self, f: f64, p: f64) -> f64 {
+    /// Q itself, or the ratio times `f p`.
+    pub(super) fn force(&self, f: f64, p: f64) -> f64 {
         match (self.q, self.q_ratio) {
             (Some(q), _) => q,
             (_, Some(r)) => r * f * p,
@@ -159,7 +164,8 @@ pub struct LengthArgs {
 }
 
 impl LengthArgs {
-    fn delta(&self, h: &Hertz, fs: f64, fd: f64) -> CliResult<f64> {
+    /// Δ itself (checked non-negative), or Δ from Λ, eq. (Lambda).
+    pub(super) fn delta(&self, h: &Hertz, fs: f64, fd: f64) -> CliResult<f64> {
         match (self.delta, self.lambda) {
             (Some(d), _) => {
                 if !d.is_finite() || d < 0.0 {
@@ -330,7 +336,8 @@ pub struct LawSpec {
 }
 
 impl LawSpec {
-    fn law(&self) -> CliResult<FrictionLaw> {
+    /// The friction law from `--json`, `--preset` or `--shape` with its coefficients.
+    pub(super) fn law(&self) -> CliResult<FrictionLaw> {
         if let Some(j) = &self.json {
             return serde_json::from_str(j)
                 .map_err(|e| CliError::Usage(format!("invalid friction law JSON: {e}")));
@@ -436,285 +443,183 @@ pub struct ApparentCurveArgs {
     pub dcm: bool,
 }
 
+/// Writes `v` as pretty JSON followed by a newline.
 fn print_json(out: &mut dyn Write, v: &Value) -> CliResult<()> {
     serde_json::to_writer_pretty(&mut *out, v)?;
     writeln!(out)?;
     Ok(())
 }
 
-fn csv_opt(v: Option<f64>) -> String {
+/// A CSV cell: the number, or empty for `None`.
+pub(super) fn csv_opt(v: Option<f64>) -> String {
     v.map(|x| format!("{x}")).unwrap_or_default()
 }
 
 /// Runs one `analytic` subcommand, writing JSON or CSV to `out`.
 pub fn run(args: &AnalyticArgs, out: &mut dyn Write) -> Result<(), CliError> {
     match &args.cmd {
-        AnalyticCmd::Hertz(g) => {
-            let h = g.hertz()?;
-            print_json(
-                out,
-                &json!({
-                    "r_eff": h.geom.r, "e_star": h.geom.e_star, "load": h.p_load,
-                    "a": h.a, "p0": h.p0,
-                    "dundurs_beta": dundurs_beta(g.e1, g.nu1, g.e2, g.nu2),
-                }),
-            )
-        }
-        AnalyticCmd::Cm(c) => {
-            let h = c.geom.hertz()?;
-            let cm = CattaneoMindlin::new(h, c.mu)?;
-            let q = c.force.force(c.mu, h.p_load);
-            let cc = cm.stick_half_width(q)?;
-            print_json(
-                out,
-                &json!({
-                    "mu": c.mu, "q": q, "q_over_mu_p": q / (c.mu * h.p_load),
-                    "a": h.a, "p0": h.p0, "c": cc, "c_over_a": cc / h.a,
-                }),
-            )
-        }
-        AnalyticCmd::Abrupt(c) => {
-            let h = c.geom.hertz()?;
-            let cm = CattaneoMindlin::abrupt(h, c.fs, c.fd)?;
-            let q = c.force.force(c.fd, h.p_load);
-            let cc = cm.stick_half_width(q)?;
-            print_json(
-                out,
-                &json!({
-                    "fs": c.fs, "fd": c.fd, "q": q, "q_over_fd_p": q / (c.fd * h.p_load),
-                    "a": h.a, "c": cc, "c_over_a": cc / h.a,
-                    "note": "abrupt transition (Delta = 0): Cattaneo-Mindlin with f = f_d",
-                }),
-            )
-        }
+        AnalyticCmd::Hertz(g) => run_hertz(g, out),
+        AnalyticCmd::Cm(c) => run_cm(c, out),
+        AnalyticCmd::Abrupt(c) => run_abrupt(c, out),
         AnalyticCmd::Dcm(d) => run_dcm(d, out),
-        AnalyticCmd::DcmCurve(d) => {
-            let r = match (d.ratio.psi, d.ratio.fs_over_fd) {
-                (Some(psi), _) => {
-                    JkrCurve::new(psi)?;
-                    if d.lambda <= 0.0 {
-                        return Err(AnalyticError::NotPositive {
-                            name: "Lambda",
-                            value: d.lambda,
-                        }
-                        .into());
-                    }
-                    1.0 + (psi / d.lambda).sqrt()
-                }
-                (_, Some(r)) => r,
-                _ => unreachable!(),
-            };
-            let (m, weak) = DoubleCm::normalized(r, d.lambda)?;
-            let pts = m.curve(weak, d.n)?;
-            writeln!(out, "c_over_a,b_over_a,mid_over_a,q_ratio,branch,stable")?;
-            for p in pts {
-                writeln!(
-                    out,
-                    "{},{},{},{},{},{}",
-                    p.c,
-                    p.b,
-                    0.5 * (p.c + p.b),
-                    p.q / (m.fd * m.hertz.p_load),
-                    match p.branch {
-                        super::dcm::Branch::Dcm => "dcm",
-                        super::dcm::Branch::CmFs => "cm_fs",
-                    },
-                    p.stable
-                )?;
-            }
-            Ok(())
-        }
-        AnalyticCmd::Traction(t) => {
-            let h = t.geom.hertz()?;
-            let delta = t.len.delta(&h, t.fs, t.fd)?;
-            let dcm = DoubleCm::new(h, t.fs, t.fd)?;
-            let q = t.force.force(t.fd, h.p_load);
-            let st = dcm.solve_delta(q, delta)?;
-            let cm = CattaneoMindlin::new(h, t.fd)?;
-            let c_cm = cm.stick_half_width(q).ok();
-            let jkr = Jkr::new(h, t.fs, t.fd, delta)?;
-            let c_jkr = jkr
-                .curve()
-                .stick_half_width(q / (t.fd * h.p_load))
-                .ok()
-                .map(|x| x * h.a);
-            writeln!(out, "x,x_over_a,p,q_dcm,q_cm_fd,q_jkr,f_dcm")?;
-            let n = t.n.max(2);
-            for i in 0..n {
-                let x = -h.a + 2.0 * h.a * i as f64 / (n - 1) as f64;
-                let p = h.pressure(x);
-                let qd = dcm.traction(x, st.c, st.b);
-                let f = if p > 0.0 { Some(qd / p) } else { None };
-                let qj = c_jkr.map(|c| jkr.traction(x, c)).filter(|v| v.is_finite());
-                writeln!(
-                    out,
-                    "{},{},{},{},{},{},{}",
-                    x,
-                    x / h.a,
-                    p,
-                    qd,
-                    csv_opt(c_cm.map(|c| cm.traction(x, c))),
-                    csv_opt(qj),
-                    csv_opt(f)
-                )?;
-            }
-            Ok(())
-        }
-        AnalyticCmd::Jkr(j) => {
-            let cur = JkrCurve::new(j.psi)?;
-            let m = cur.maximum();
-            let mut v = json!({
-                "psi": j.psi, "q_max_ratio": m.q_ratio, "c_max_over_a": m.c_over_a,
-            });
-            if let Some(q) = j.q_ratio {
-                v["q_ratio"] = json!(q);
-                v["c_over_a"] = json!(cur.stick_half_width(q)?);
-            }
-            if let Some(l) = j.lambda {
-                super::non_negative("Lambda", l)?;
-                let s = (m.c_over_a > 0.0).then(|| s0_over_c(l, m.c_over_a));
-                v["lambda"] = json!(l);
-                v["s0_over_c_at_max"] = json!(s);
-                v["small_scale_ok"] = json!(s.is_some_and(small_scale_ok));
-            }
-            print_json(out, &v)
-        }
-        AnalyticCmd::JkrCurve(j) => {
-            let cur = JkrCurve::new(j.psi)?;
-            writeln!(out, "c_over_a,q_ratio,stable")?;
-            for (c, q, s) in cur.curve(j.n) {
-                writeln!(out, "{c},{q},{s}")?;
-            }
-            Ok(())
-        }
-        AnalyticCmd::Scales(s) => {
-            let h = s.geom.hertz()?;
-            let delta = s.len.delta(&h, s.fs, s.fd)?;
-            let sc = Scales::new(&h, s.fs, s.fd, delta)?;
-            let mut v = serde_json::to_value(sc)?;
-            v["a"] = json!(h.a);
-            v["p0"] = json!(h.p0);
-            v["small_scale_limit"] = json!(scales::SMALL_SCALE_LIMIT);
-            if let Some(ct) = s.c_over_a {
-                if !(ct > 0.0 && ct < 1.0) {
-                    return Err(AnalyticError::OutOfRange {
-                        name: "c/a",
-                        value: ct,
-                        lo: 0.0,
-                        hi: 1.0,
-                    }
-                    .into());
-                }
-                let c = ct * h.a;
-                let jkr = Jkr::new(h, s.fs, s.fd, delta)?;
-                let pc = h.pressure(c);
-                let s0c = scales::s0(h.geom.e_star, delta, s.fs, s.fd, pc)?;
-                v["c_over_a"] = json!(ct);
-                v["p_c"] = json!(pc);
-                v["s0_c"] = json!(s0c);
-                v["s0_over_c"] = json!(s0c / c);
-                v["small_scale_ok"] = json!(small_scale_ok(s0c / c));
-                v["w_c"] = json!(jkr.energy(c));
-                v["k_ii_c"] = json!(k_ii(jkr.energy(c), h.geom.e_star));
-                v["jkr_zone_width_c"] = json!(jkr.transition_width(c));
-            }
-            print_json(out, &v)
-        }
-        AnalyticCmd::Law(l) => {
-            let law = l.spec.law()?;
-            let mut v = json!({
-                "law": serde_json::to_value(&law)?,
-                "f_static": law.f_static(),
-            });
-            match law.f_dynamic() {
-                Ok(fd) => {
-                    v["f_dynamic"] = json!(fd);
-                    v["w_over_p"] = json!(law.w_over_p()?);
-                    v["delta"] = json!(law.delta().ok());
-                }
-                Err(e) => {
-                    v["f_dynamic"] = Value::Null;
-                    v["note"] = json!(e.to_string());
-                }
-            }
-            if let Some(u) = l.u {
-                v["u"] = json!(u);
-                v["mu_u"] = json!(law.mu(u));
-                v["dmu_du"] = json!(law.dmu_du(u));
-            }
-            print_json(out, &v)
-        }
-        AnalyticCmd::LawCurve(l) => {
-            let law = l.spec.law()?;
-            let u_max = match l.u_max {
-                Some(u) if u.is_finite() && u > 0.0 => u,
-                Some(u) => {
-                    return Err(AnalyticError::NotPositive {
-                        name: "u-max",
-                        value: u,
-                    }
-                    .into());
-                }
-                None => match &law {
-                    FrictionLaw::Table(t) => 1.5 * t.rows().last().map(|r| r[0]).unwrap_or(1.0),
-                    _ => 3.0 * law.delta().unwrap_or(0.0),
-                }
-                .max(1e-12),
-            };
-            writeln!(out, "u,mu,dmu_du")?;
-            let n = l.n.max(2);
-            for i in 0..n {
-                let u = u_max * i as f64 / (n - 1) as f64;
-                writeln!(out, "{},{},{}", u, law.mu(u), csv_opt(law.dmu_du(u)))?;
-            }
-            Ok(())
-        }
-        AnalyticCmd::Presets => {
-            let v: Vec<Value> = PRESETS
-                .iter()
-                .map(|p| {
-                    json!({"name": p.0, "fs": p.1, "fd": p.2, "delta_um": p.3, "delta_mm": p.3 * 1e-3})
-                })
-                .collect();
-            print_json(out, &json!(v))
-        }
-        AnalyticCmd::ImpliedLaw(i) => {
-            let pts = implied_law_normalized(i.a_over_c, i.b_over_c, i.n)?;
-            writeln!(out, "u_over_delta,f_norm")?;
-            for p in pts {
-                writeln!(out, "{},{}", p[0], p[1])?;
-            }
-            Ok(())
-        }
-        AnalyticCmd::Apparent(a) => {
-            let p = apparent(a.chi, a.fs_over_fd, !a.no_dcm)?;
-            print_json(out, &serde_json::to_value(p)?)
-        }
-        AnalyticCmd::ApparentCurve(a) => {
-            let pts = apparent_curve(a.chi, a.ratio_max, a.n, a.dcm)?;
-            writeln!(
-                out,
-                "fs_over_fd,q_max_jkr,c_max_jkr,s0_over_c,small_scale_ok,q_max_dcm,c_max_dcm,b_max_dcm"
-            )?;
-            for p in pts {
-                writeln!(
-                    out,
-                    "{},{},{},{},{},{},{},{}",
-                    p.fs_over_fd,
-                    p.q_max_jkr,
-                    p.c_max_jkr,
-                    csv_opt(p.s0_over_c),
-                    p.small_scale_ok,
-                    csv_opt(p.q_max_dcm),
-                    csv_opt(p.c_max_dcm),
-                    csv_opt(p.b_max_dcm)
-                )?;
-            }
-            Ok(())
-        }
+        AnalyticCmd::DcmCurve(d) => cli_curves::dcm_curve(d, out),
+        AnalyticCmd::Traction(t) => cli_curves::traction(t, out),
+        AnalyticCmd::Jkr(j) => run_jkr(j, out),
+        AnalyticCmd::JkrCurve(j) => cli_curves::jkr_curve(j, out),
+        AnalyticCmd::Scales(s) => run_scales(s, out),
+        AnalyticCmd::Law(l) => run_law(l, out),
+        AnalyticCmd::LawCurve(l) => cli_curves::law_curve(l, out),
+        AnalyticCmd::Presets => run_presets(out),
+        AnalyticCmd::ImpliedLaw(i) => cli_curves::implied_law(i, out),
+        AnalyticCmd::Apparent(a) => run_apparent(a, out),
+        AnalyticCmd::ApparentCurve(a) => cli_curves::apparent_curve(a, out),
     }
 }
 
+/// `hertz`: R, E*, a, p0 and Dundurs' β as JSON.
+fn run_hertz(g: &GeomArgs, out: &mut dyn Write) -> CliResult<()> {
+    let h = g.hertz()?;
+    print_json(
+        out,
+        &json!({
+            "r_eff": h.geom.r, "e_star": h.geom.e_star, "load": h.p_load,
+            "a": h.a, "p0": h.p0,
+            "dundurs_beta": dundurs_beta(g.e1, g.nu1, g.e2, g.nu2),
+        }),
+    )
+}
+
+/// `cm`: the Cattaneo–Mindlin stick semi-width for constant f as JSON.
+fn run_cm(c: &CmArgs, out: &mut dyn Write) -> CliResult<()> {
+    let h = c.geom.hertz()?;
+    let cm = CattaneoMindlin::new(h, c.mu)?;
+    let q = c.force.force(c.mu, h.p_load);
+    let cc = cm.stick_half_width(q)?;
+    print_json(
+        out,
+        &json!({
+            "mu": c.mu, "q": q, "q_over_mu_p": q / (c.mu * h.p_load),
+            "a": h.a, "p0": h.p0, "c": cc, "c_over_a": cc / h.a,
+        }),
+    )
+}
+
+/// `abrupt`: the abrupt static→dynamic transition (C–M with f = f_d) as JSON.
+fn run_abrupt(c: &AbruptArgs, out: &mut dyn Write) -> CliResult<()> {
+    let h = c.geom.hertz()?;
+    let cm = CattaneoMindlin::abrupt(h, c.fs, c.fd)?;
+    let q = c.force.force(c.fd, h.p_load);
+    let cc = cm.stick_half_width(q)?;
+    print_json(
+        out,
+        &json!({
+            "fs": c.fs, "fd": c.fd, "q": q, "q_over_fd_p": q / (c.fd * h.p_load),
+            "a": h.a, "c": cc, "c_over_a": cc / h.a,
+            "note": "abrupt transition (Delta = 0): Cattaneo-Mindlin with f = f_d",
+        }),
+    )
+}
+
+/// `jkr`: the JKR maximum, optionally the stable c/a at a force and the small-scale check, as JSON.
+fn run_jkr(j: &JkrArgs, out: &mut dyn Write) -> CliResult<()> {
+    let cur = JkrCurve::new(j.psi)?;
+    let m = cur.maximum();
+    let mut v = json!({
+        "psi": j.psi, "q_max_ratio": m.q_ratio, "c_max_over_a": m.c_over_a,
+    });
+    if let Some(q) = j.q_ratio {
+        v["q_ratio"] = json!(q);
+        v["c_over_a"] = json!(cur.stick_half_width(q)?);
+    }
+    if let Some(l) = j.lambda {
+        super::non_negative("Lambda", l)?;
+        let s = (m.c_over_a > 0.0).then(|| s0_over_c(l, m.c_over_a));
+        v["lambda"] = json!(l);
+        v["s0_over_c_at_max"] = json!(s);
+        v["small_scale_ok"] = json!(s.is_some_and(small_scale_ok));
+    }
+    print_json(out, &v)
+}
+
+/// `scales`: the length scales as JSON, plus the values at a stick radius if `--c-over-a` is given.
+fn run_scales(s: &ScalesArgs, out: &mut dyn Write) -> CliResult<()> {
+    let h = s.geom.hertz()?;
+    let delta = s.len.delta(&h, s.fs, s.fd)?;
+    let sc = Scales::new(&h, s.fs, s.fd, delta)?;
+    let mut v = serde_json::to_value(sc)?;
+    v["a"] = json!(h.a);
+    v["p0"] = json!(h.p0);
+    v["small_scale_limit"] = json!(scales::SMALL_SCALE_LIMIT);
+    if let Some(ct) = s.c_over_a {
+        if !(ct > 0.0 && ct < 1.0) {
+            return Err(AnalyticError::OutOfRange {
+                name: "c/a",
+                value: ct,
+                lo: 0.0,
+                hi: 1.0,
+            }
+            .into());
+        }
+        let c = ct * h.a;
+        let jkr = Jkr::new(h, s.fs, s.fd, delta)?;
+        let pc = h.pressure(c);
+        let s0c = scales::s0(h.geom.e_star, delta, s.fs, s.fd, pc)?;
+        v["c_over_a"] = json!(ct);
+        v["p_c"] = json!(pc);
+        v["s0_c"] = json!(s0c);
+        v["s0_over_c"] = json!(s0c / c);
+        v["small_scale_ok"] = json!(small_scale_ok(s0c / c));
+        v["w_c"] = json!(jkr.energy(c));
+        v["k_ii_c"] = json!(k_ii(jkr.energy(c), h.geom.e_star));
+        v["jkr_zone_width_c"] = json!(jkr.transition_width(c));
+    }
+    print_json(out, &v)
+}
+
+/// `law`: a friction law with f_s, f_d, W/p and Δ, optionally f(u) and df/du at a slip, as JSON.
+fn run_law(l: &LawArgs, out: &mut dyn Write) -> CliResult<()> {
+    let law = l.spec.law()?;
+    let mut v = json!({
+        "law": serde_json::to_value(&law)?,
+        "f_static": law.f_static(),
+    });
+    match law.f_dynamic() {
+        Ok(fd) => {
+            v["f_dynamic"] = json!(fd);
+            v["w_over_p"] = json!(law.w_over_p()?);
+            v["delta"] = json!(law.delta().ok());
+        }
+        Err(e) => {
+            v["f_dynamic"] = Value::Null;
+            v["note"] = json!(e.to_string());
+        }
+    }
+    if let Some(u) = l.u {
+        v["u"] = json!(u);
+        v["mu_u"] = json!(law.mu(u));
+        v["dmu_du"] = json!(law.dmu_du(u));
+    }
+    print_json(out, &v)
+}
+
+/// `presets`: the Table 1 presets as a JSON array.
+fn run_presets(out: &mut dyn Write) -> CliResult<()> {
+    let v: Vec<Value> = PRESETS
+        .iter()
+        .map(
+            |p| json!({"name": p.0, "fs": p.1, "fd": p.2, "delta_um": p.3, "delta_mm": p.3 * 1e-3}),
+        )
+        .collect();
+    print_json(out, &json!(v))
+}
+
+/// `apparent`: the apparent static friction for given χ and f_s/f_d as JSON.
+fn run_apparent(a: &ApparentArgs, out: &mut dyn Write) -> CliResult<()> {
+    let p = apparent(a.chi, a.fs_over_fd, !a.no_dcm)?;
+    print_json(out, &serde_json::to_value(p)?)
+}
+
+/// `dcm`: the double Cattaneo–Mindlin state (c, b, W) with the JKR and C–M comparisons as JSON.
 fn run_dcm(d: &DcmArgs, out: &mut dyn Write) -> CliResult<()> {
     let h = d.geom.hertz()?;
     let m = DoubleCm::new(h, d.fs, d.fd)?;

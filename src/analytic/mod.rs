@@ -14,13 +14,14 @@
 //! | [`scales`] | `s0` (s0), `Λ` (Lambda), `χ` (chi), `Ψ`; small-scale criterion |
 //! | [`apparent`] | apparent static friction `Q_max/(f_d P)` vs `f_s/f_d` (Fig. 6) |
 //! | [`elliptic`] | complete elliptic integrals `K(m)`, `E(m)` by the AGM |
-//! | [`cli`] | the `stickslip analytic …` subcommands |
+//! | [`cli`] | the `stickslip analytic …` subcommands (the CSV curve writers in `cli_curves`) |
 //!
 //! Units are whatever the caller uses consistently (the VM272 defaults are mm, N/mm², N/mm).
 
 pub mod apparent;
 pub mod cattaneo;
 pub mod cli;
+mod cli_curves;
 pub mod dcm;
 pub mod elliptic;
 pub mod hertz;

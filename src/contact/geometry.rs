@@ -133,6 +133,97 @@ pub fn build_pair(
     candidate_gap: f64,
     common: bool,
 ) -> Result<Pair, PairError> {
+    let ZoneScan {
+        zone,
+        min_gap,
+        samples,
+        deepest,
+        zone_gap,
+    } = scan_slave(mesh, slave, master, candidate_gap);
+    if let Some((depth, x)) = deepest {
+        return Err(PairError::Penetration {
+            slave: slave_name.into(),
+            master: master_name.into(),
+            depth,
+            x: x[0],
+            y: x[1],
+        });
+    }
+    if zone.is_empty() {
+        return Err(PairError::EmptyZone {
+            slave: slave_name.into(),
+            master: master_name.into(),
+            gap: candidate_gap,
+            min: min_gap,
+        });
+    }
+    // The first touch: the normals of the points of smallest gap (averaged over ties, such as
+    // the two edges meeting at the touching node).
+    let tie = min_gap + 1e-6 * candidate_gap;
+    let sum = samples
+        .iter()
+        .filter(|(g, _)| *g <= tie)
+        .fold([0.0, 0.0], |s, (_, n)| [s[0] + n[0], s[1] + n[1]]);
+    let len = sum[0].hypot(sum[1]);
+    let first_touch = [sum[0] / len, sum[1] / len];
+    let zone_edges: Vec<[usize; 3]> = zone.iter().map(|&i| slave[i]).collect();
+    let near = master_near_zone(mesh, master, &zone_edges, zone_gap);
+    let normal = common.then_some(first_touch);
+    let mortar = mortar::build(&mesh.nodes, &zone_edges, &near, normal, 2.0 * zone_gap);
+    let face_ends = check_coverage(
+        mesh,
+        slave_name,
+        (slave, &zone_edges),
+        master,
+        normal,
+        &mortar,
+    )?;
+    let rim_nodes = zone_rim(slave, &zone, &zone_edges);
+    // The guard against clipping must see every rim node: each carries a multiplier.
+    if let Some(&n) = rim_nodes
+        .iter()
+        .find(|n| !mortar.slave_nodes.contains(n) && !face_ends.contains(n))
+    {
+        return Err(PairError::Dropped {
+            slave: slave_name.into(),
+            x: mesh.nodes[n][0],
+            y: mesh.nodes[n][1],
+            why: "a node on the rim of the candidate zone carries no contact unknown".into(),
+        });
+    }
+    Ok(Pair {
+        mortar,
+        zone_edges,
+        rim_nodes,
+        face_ends,
+        candidate_gap,
+        common_normal: common.then_some(first_touch),
+        first_touch,
+    })
+}
+
+/// What [`scan_slave`] finds on the slave face.
+struct ZoneScan {
+    /// Indices of the slave edges in the candidate zone.
+    zone: Vec<usize>,
+    /// The smallest initial gap sampled.
+    min_gap: f64,
+    /// (initial gap, slave normal) at every sampled point that projects onto the master face.
+    samples: Vec<(f64, [f64; 2])>,
+    /// The deepest initial penetration, if any (reported, not resolved): (depth, point).
+    deepest: Option<(f64, [f64; 2])>,
+    /// The largest initial gap sampled on a zone edge (bounds the mortar's search).
+    zone_gap: f64,
+}
+
+/// Samples the initial gap at the ends and middle of every slave edge; an edge with a sample
+/// within `candidate_gap` is in the zone.
+fn scan_slave(
+    mesh: &Mesh,
+    slave: &[[usize; 3]],
+    master: &[[usize; 3]],
+    candidate_gap: f64,
+) -> ZoneScan {
     let mut zone = Vec::new();
     let mut min_gap = f64::INFINITY;
     let mut samples: Vec<(f64, [f64; 2])> = Vec::new();
@@ -164,37 +255,26 @@ pub fn build_pair(
             zone_gap = zone_gap.max(edge_gap);
         }
     }
-    if let Some((depth, x)) = deepest {
-        return Err(PairError::Penetration {
-            slave: slave_name.into(),
-            master: master_name.into(),
-            depth,
-            x: x[0],
-            y: x[1],
-        });
+    ZoneScan {
+        zone,
+        min_gap,
+        samples,
+        deepest,
+        zone_gap,
     }
-    if zone.is_empty() {
-        return Err(PairError::EmptyZone {
-            slave: slave_name.into(),
-            master: master_name.into(),
-            gap: candidate_gap,
-            min: min_gap,
-        });
-    }
-    // The first touch: the normals of the points of smallest gap (averaged over ties, such as
-    // the two edges meeting at the touching node).
-    let tie = min_gap + 1e-6 * candidate_gap;
-    let sum = samples
-        .iter()
-        .filter(|(g, _)| *g <= tie)
-        .fold([0.0, 0.0], |s, (_, n)| [s[0] + n[0], s[1] + n[1]]);
-    let len = sum[0].hypot(sum[1]);
-    let first_touch = [sum[0] / len, sum[1] / len];
-    let zone_edges: Vec<[usize; 3]> = zone.iter().map(|&i| slave[i]).collect();
-    // Master edges near the zone.
+}
+
+/// Master edges near the zone: those with a node within `2 zone_gap + 2 h_max` of the zone's
+/// bounding box.
+fn master_near_zone(
+    mesh: &Mesh,
+    master: &[[usize; 3]],
+    zone_edges: &[[usize; 3]],
+    zone_gap: f64,
+) -> Vec<[usize; 3]> {
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     let mut hmax: f64 = 0.0;
-    for e in &zone_edges {
+    for e in zone_edges {
         let a = mesh.nodes[e[0]];
         let b = mesh.nodes[e[1]];
         hmax = hmax.max((a[0] - b[0]).hypot(a[1] - b[1]));
@@ -206,7 +286,7 @@ pub fn build_pair(
         }
     }
     let reach = 2.0 * zone_gap + 2.0 * hmax;
-    let near: Vec<[usize; 3]> = master
+    master
         .iter()
         .filter(|e| {
             e.iter().any(|&k| {
@@ -218,19 +298,13 @@ pub fn build_pair(
             })
         })
         .copied()
-        .collect();
-    let normal = common.then_some(first_touch);
-    let mortar = mortar::build(&mesh.nodes, &zone_edges, &near, normal, 2.0 * zone_gap);
-    let face_ends = check_coverage(
-        mesh,
-        slave_name,
-        (slave, &zone_edges),
-        master,
-        normal,
-        &mortar,
-    )?;
-    // The rim: zone vertices shared with a slave edge outside the zone. Contact there means
-    // the zone may clip it (a zone that is the whole slave face has no rim).
+        .collect()
+}
+
+/// The rim: zone vertices shared with a slave edge outside the zone (with the other nodes of
+/// their zone edges), sorted. Contact there means the zone may clip it (a zone that is the
+/// whole slave face has no rim).
+fn zone_rim(slave: &[[usize; 3]], zone: &[usize], zone_edges: &[[usize; 3]]) -> Vec<usize> {
     let in_zone: std::collections::HashSet<usize> = zone.iter().copied().collect();
     let outside: std::collections::HashSet<usize> = slave
         .iter()
@@ -239,34 +313,14 @@ pub fn build_pair(
         .flat_map(|(_, e)| [e[0], e[1]])
         .collect();
     let mut rim_nodes = Vec::new();
-    for e in &zone_edges {
+    for e in zone_edges {
         if outside.contains(&e[0]) || outside.contains(&e[1]) {
             rim_nodes.extend_from_slice(e);
         }
     }
     rim_nodes.sort_unstable();
     rim_nodes.dedup();
-    // The guard against clipping must see every rim node: each carries a multiplier.
-    if let Some(&n) = rim_nodes
-        .iter()
-        .find(|n| !mortar.slave_nodes.contains(n) && !face_ends.contains(n))
-    {
-        return Err(PairError::Dropped {
-            slave: slave_name.into(),
-            x: mesh.nodes[n][0],
-            y: mesh.nodes[n][1],
-            why: "a node on the rim of the candidate zone carries no contact unknown".into(),
-        });
-    }
-    Ok(Pair {
-        mortar,
-        zone_edges,
-        rim_nodes,
-        face_ends,
-        candidate_gap,
-        common_normal: common.then_some(first_touch),
-        first_touch,
-    })
+    rim_nodes
 }
 
 /// Verifies that the mortar operator covers every zone edge wherever the edge faces the

@@ -19,7 +19,7 @@
 
 use crate::quadrature::gauss_legendre;
 use crate::shapes::lin3;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 /// A row of the mortar operator: (mesh node, coefficient vector for (ux, uy)).
 pub type Row = Vec<(usize, [f64; 2])>;
@@ -160,49 +160,23 @@ pub fn build(
     max_gap: f64,
 ) -> Mortar {
     let n0 = common_normal;
-    #[derive(Default)]
-    struct Acc {
-        w: f64,
-        g0: f64,
-        g: BTreeMap<usize, [f64; 2]>,
-        t: BTreeMap<usize, [f64; 2]>,
-        h: f64,
-        n: [f64; 2],
-        tau: [f64; 2],
-    }
-    let mut acc: BTreeMap<usize, Acc> = BTreeMap::new();
+    let mut sums = Sums::default();
     let coords = |e: &[usize; 3]| e.map(|k| x[k]);
     // Bounding boxes of the master edges for a quick search.
-    let mboxes: Vec<([f64; 2], [f64; 2])> = master
-        .iter()
-        .map(|e| {
-            let c = coords(e);
-            let mut lo = [f64::INFINITY; 2];
-            let mut hi = [f64::NEG_INFINITY; 2];
-            for p in c {
-                for i in 0..2 {
-                    lo[i] = lo[i].min(p[i]);
-                    hi[i] = hi[i].max(p[i]);
-                }
-            }
-            (lo, hi)
-        })
-        .collect();
-    let mut master_nodes = std::collections::BTreeSet::new();
+    let mboxes: Vec<([f64; 2], [f64; 2])> =
+        master.iter().map(|e| bounding_box(&coords(e))).collect();
     let mut coverage = Vec::with_capacity(slave.len());
-    let mut lost_points = 0;
     for se in slave {
         let xs = coords(se);
         let chord = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
+        let edge = SlaveEdge {
+            nodes: se,
+            xs,
+            chord,
+        };
         // Master edges near this slave edge: the normals from the edge travel at most
         // `max_gap` (plus a margin of a few chords for the curvature of both faces).
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in xs {
-            for i in 0..2 {
-                lo[i] = lo[i].min(p[i]);
-                hi[i] = hi[i].max(p[i]);
-            }
-        }
+        let (lo, hi) = bounding_box(&xs);
         let mut segments: Vec<(f64, f64, usize)> = Vec::new();
         for (mi, me) in master.iter().enumerate() {
             let (mlo, mhi) = mboxes[mi];
@@ -215,124 +189,202 @@ pub fn build(
                 continue;
             }
             let xm = coords(me);
-            let (Some(ra), Some(rb)) = (r_of_s(&xs, &xm, -1.0, n0), r_of_s(&xs, &xm, 1.0, n0))
-            else {
-                continue;
-            };
-            if ra.max(rb) < -1.0 || ra.min(rb) > 1.0 {
-                continue;
-            }
-            // The s-interval where r(s) ∈ [−1, 1].
-            let mut s_lo: f64 = -1.0;
-            let mut s_hi: f64 = 1.0;
-            for target in [-1.0, 1.0] {
-                if (ra - target) * (rb - target) < 0.0 {
-                    let Some(s) = solve_r(&xs, &xm, target, -1.0, 1.0, n0) else {
-                        // Cannot happen for faces that face each other; counted, never hidden.
-                        lost_points += 1;
-                        continue;
-                    };
-                    // Which side of s is inside?
-                    // r(s) is monotone: the left part (s < s*) is inside iff r(−1) is.
-                    let inside_left = if target < 0.0 { ra > -1.0 } else { ra < 1.0 };
-                    if inside_left {
-                        s_hi = s_hi.min(s);
-                    } else {
-                        s_lo = s_lo.max(s);
-                    }
-                }
-            }
-            // A slave edge whose image only touches this master edge at an end gives no segment.
-            let inside =
-                r_of_s(&xs, &xm, 0.5 * (s_lo + s_hi), n0).is_some_and(|r| r.abs() <= 1.0 + 1e-9);
-            if s_hi - s_lo > 1e-14 && inside {
+            if let Some((s_lo, s_hi)) = segment_on(&xs, &xm, n0, &mut sums.lost_points) {
                 segments.push((s_lo, s_hi, mi));
             }
         }
         coverage.push(segments.iter().map(|(lo, hi, _)| hi - lo).sum::<f64>());
         for (s_lo, s_hi, mi) in segments {
             let xm = coords(&master[mi]);
-            let half = 0.5 * (s_hi - s_lo);
-            for &(gq, wq) in gauss_legendre(5) {
-                let s = s_lo + half * (gq + 1.0);
-                let (xp, n, tau, j) = frame_with(&xs, s, n0);
-                let Some((r, g0)) = project_along(&xm, xp, n) else {
-                    lost_points += 1;
-                    continue;
-                };
-                let ns = lin3::n(s);
-                let nm = lin3::n(r.clamp(-1.0, 1.0));
-                let dw = wq * half * j;
-                for a in 0..3 {
-                    let e = acc.entry(se[a]).or_default();
-                    let fa = ns[a] * dw;
-                    e.w += fa;
-                    e.g0 += fa * g0;
-                    e.h = e.h.max(chord);
-                    for i in 0..3 {
-                        let v = e.g.entry(se[i]).or_insert([0.0; 2]);
-                        v[0] -= fa * ns[i] * n[0];
-                        v[1] -= fa * ns[i] * n[1];
-                        let v = e.t.entry(se[i]).or_insert([0.0; 2]);
-                        v[0] -= fa * ns[i] * tau[0];
-                        v[1] -= fa * ns[i] * tau[1];
-                    }
-                    for k in 0..3 {
-                        let v = e.g.entry(master[mi][k]).or_insert([0.0; 2]);
-                        v[0] += fa * nm[k] * n[0];
-                        v[1] += fa * nm[k] * n[1];
-                        let v = e.t.entry(master[mi][k]).or_insert([0.0; 2]);
-                        v[0] += fa * nm[k] * tau[0];
-                        v[1] += fa * nm[k] * tau[1];
-                        master_nodes.insert(master[mi][k]);
-                    }
+            sums.add_segment(&edge, &master[mi], &xm, (s_lo, s_hi), n0);
+        }
+        sums.add_nodal_frame(&edge, n0);
+    }
+    sums.into_mortar(x, coverage)
+}
+
+/// Lower and upper corners of the bounding box of `points`.
+fn bounding_box(points: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for p in points {
+        for i in 0..2 {
+            lo[i] = lo[i].min(p[i]);
+            hi[i] = hi[i].max(p[i]);
+        }
+    }
+    (lo, hi)
+}
+
+/// The segment of slave edge `xs` that projects onto master edge `xm`: the s-interval where
+/// `r(s) ∈ [−1, 1]`, or `None` when the edges do not face each other over a positive length.
+/// A crossing whose bisection fails is counted in `lost_points`.
+fn segment_on(
+    xs: &[[f64; 2]; 3],
+    xm: &[[f64; 2]; 3],
+    n0: Option<[f64; 2]>,
+    lost_points: &mut usize,
+) -> Option<(f64, f64)> {
+    let (Some(ra), Some(rb)) = (r_of_s(xs, xm, -1.0, n0), r_of_s(xs, xm, 1.0, n0)) else {
+        return None;
+    };
+    if ra.max(rb) < -1.0 || ra.min(rb) > 1.0 {
+        return None;
+    }
+    // The s-interval where r(s) ∈ [−1, 1].
+    let mut s_lo: f64 = -1.0;
+    let mut s_hi: f64 = 1.0;
+    for target in [-1.0, 1.0] {
+        if (ra - target) * (rb - target) < 0.0 {
+            let Some(s) = solve_r(xs, xm, target, -1.0, 1.0, n0) else {
+                // Cannot happen for faces that face each other; counted, never hidden.
+                *lost_points += 1;
+                continue;
+            };
+            // Which side of s is inside?
+            // r(s) is monotone: the left part (s < s*) is inside iff r(−1) is.
+            let inside_left = if target < 0.0 { ra > -1.0 } else { ra < 1.0 };
+            if inside_left {
+                s_hi = s_hi.min(s);
+            } else {
+                s_lo = s_lo.max(s);
+            }
+        }
+    }
+    // A slave edge whose image only touches this master edge at an end gives no segment.
+    let inside = r_of_s(xs, xm, 0.5 * (s_lo + s_hi), n0).is_some_and(|r| r.abs() <= 1.0 + 1e-9);
+    (s_hi - s_lo > 1e-14 && inside).then_some((s_lo, s_hi))
+}
+
+/// A slave edge: its three mesh nodes, their coordinates and its chord.
+struct SlaveEdge<'a> {
+    nodes: &'a [usize; 3],
+    xs: [[f64; 2]; 3],
+    chord: f64,
+}
+
+/// The integrals accumulated at one slave node.
+#[derive(Default)]
+struct Acc {
+    w: f64,
+    g0: f64,
+    g: BTreeMap<usize, [f64; 2]>,
+    t: BTreeMap<usize, [f64; 2]>,
+    h: f64,
+    n: [f64; 2],
+    tau: [f64; 2],
+}
+
+/// The running sums of [`build`]: the integrals per slave node, the master nodes met and the
+/// integration points lost.
+#[derive(Default)]
+struct Sums {
+    acc: BTreeMap<usize, Acc>,
+    master_nodes: BTreeSet<usize>,
+    lost_points: usize,
+}
+
+impl Sums {
+    /// Adds the integrals over the segment `[s_lo, s_hi]` of `edge` that projects onto the
+    /// master edge `me` (coordinates `xm`), by 5-point Gauss.
+    fn add_segment(
+        &mut self,
+        edge: &SlaveEdge,
+        me: &[usize; 3],
+        xm: &[[f64; 2]; 3],
+        (s_lo, s_hi): (f64, f64),
+        n0: Option<[f64; 2]>,
+    ) {
+        let (se, xs, chord) = (edge.nodes, &edge.xs, edge.chord);
+        let half = 0.5 * (s_hi - s_lo);
+        for &(gq, wq) in gauss_legendre(5) {
+            let s = s_lo + half * (gq + 1.0);
+            let (xp, n, tau, j) = frame_with(xs, s, n0);
+            let Some((r, g0)) = project_along(xm, xp, n) else {
+                self.lost_points += 1;
+                continue;
+            };
+            let ns = lin3::n(s);
+            let nm = lin3::n(r.clamp(-1.0, 1.0));
+            let dw = wq * half * j;
+            for a in 0..3 {
+                let e = self.acc.entry(se[a]).or_default();
+                let fa = ns[a] * dw;
+                e.w += fa;
+                e.g0 += fa * g0;
+                e.h = e.h.max(chord);
+                for i in 0..3 {
+                    let v = e.g.entry(se[i]).or_insert([0.0; 2]);
+                    v[0] -= fa * ns[i] * n[0];
+                    v[1] -= fa * ns[i] * n[1];
+                    let v = e.t.entry(se[i]).or_insert([0.0; 2]);
+                    v[0] -= fa * ns[i] * tau[0];
+                    v[1] -= fa * ns[i] * tau[1];
+                }
+                for k in 0..3 {
+                    let v = e.g.entry(me[k]).or_insert([0.0; 2]);
+                    v[0] += fa * nm[k] * n[0];
+                    v[1] += fa * nm[k] * n[1];
+                    let v = e.t.entry(me[k]).or_insert([0.0; 2]);
+                    v[0] += fa * nm[k] * tau[0];
+                    v[1] += fa * nm[k] * tau[1];
+                    self.master_nodes.insert(me[k]);
                 }
             }
         }
-        // Nodal frame: normal and tangent of the edge at its nodes (averaged over edges).
+    }
+
+    /// Nodal frame: adds the normal and tangent of `edge` at its nodes (averaged over edges).
+    fn add_nodal_frame(&mut self, edge: &SlaveEdge, n0: Option<[f64; 2]>) {
         for (a, s) in [(0usize, -1.0), (1, 1.0), (2, 0.0)] {
-            let (_, n, tau, _) = frame_with(&xs, s, n0);
-            let e = acc.entry(se[a]).or_default();
+            let (_, n, tau, _) = frame_with(&edge.xs, s, n0);
+            let e = self.acc.entry(edge.nodes[a]).or_default();
             e.n = [e.n[0] + n[0], e.n[1] + n[1]];
             e.tau = [e.tau[0] + tau[0], e.tau[1] + tau[1]];
         }
     }
-    let mut m = Mortar::default();
-    let mut entries: Vec<(usize, Acc)> = acc.into_iter().filter(|(_, a)| a.w > 0.0).collect();
-    // Order along the face by the tangent direction of the first node (x for the VM272 arcs).
-    entries.sort_by(|a, b| {
-        let (pa, pb) = (x[a.0], x[b.0]);
-        let t = a.1.tau;
-        (pa[0] * t[0] + pa[1] * t[1])
-            .partial_cmp(&(pb[0] * t[0] + pb[1] * t[1]))
-            .expect("finite")
-    });
-    for (node, a) in entries {
-        let unit = |v: [f64; 2]| {
-            let l = v[0].hypot(v[1]);
-            [v[0] / l, v[1] / l]
-        };
-        m.slave_nodes.push(node);
-        m.weight.push(a.w);
-        m.gap0.push(a.g0 / a.w);
-        m.g_rows.push(
-            a.g.into_iter()
-                .map(|(k, v)| (k, [v[0] / a.w, v[1] / a.w]))
-                .filter(|(_, v)| v[0] != 0.0 || v[1] != 0.0)
-                .collect(),
-        );
-        m.t_rows.push(
-            a.t.into_iter()
-                .map(|(k, v)| (k, [v[0] / a.w, v[1] / a.w]))
-                .filter(|(_, v)| v[0] != 0.0 || v[1] != 0.0)
-                .collect(),
-        );
-        m.normal.push(unit(a.n));
-        m.tangent.push(unit(a.tau));
-        m.h.push(a.h);
+
+    /// The operator: nodes with positive weight ordered along the face, rows divided by the
+    /// weights (exact zeros dropped), unit nodal frames.
+    fn into_mortar(self, x: &[[f64; 2]], coverage: Vec<f64>) -> Mortar {
+        let mut m = Mortar::default();
+        let mut entries: Vec<(usize, Acc)> =
+            self.acc.into_iter().filter(|(_, a)| a.w > 0.0).collect();
+        // Order along the face by the tangent direction of the first node (x for the VM272 arcs).
+        entries.sort_by(|a, b| {
+            let (pa, pb) = (x[a.0], x[b.0]);
+            let t = a.1.tau;
+            (pa[0] * t[0] + pa[1] * t[1])
+                .partial_cmp(&(pb[0] * t[0] + pb[1] * t[1]))
+                .expect("finite")
+        });
+        for (node, a) in entries {
+            let unit = |v: [f64; 2]| {
+                let l = v[0].hypot(v[1]);
+                [v[0] / l, v[1] / l]
+            };
+            m.slave_nodes.push(node);
+            m.weight.push(a.w);
+            m.gap0.push(a.g0 / a.w);
+            m.g_rows.push(
+                a.g.into_iter()
+                    .map(|(k, v)| (k, [v[0] / a.w, v[1] / a.w]))
+                    .filter(|(_, v)| v[0] != 0.0 || v[1] != 0.0)
+                    .collect(),
+            );
+            m.t_rows.push(
+                a.t.into_iter()
+                    .map(|(k, v)| (k, [v[0] / a.w, v[1] / a.w]))
+                    .filter(|(_, v)| v[0] != 0.0 || v[1] != 0.0)
+                    .collect(),
+            );
+            m.normal.push(unit(a.n));
+            m.tangent.push(unit(a.tau));
+            m.h.push(a.h);
+        }
+        m.master_nodes = self.master_nodes.into_iter().collect();
+        m.coverage = coverage;
+        m.lost_points = self.lost_points;
+        m
     }
-    m.master_nodes = master_nodes.into_iter().collect();
-    m.coverage = coverage;
-    m.lost_points = lost_points;
-    m
 }

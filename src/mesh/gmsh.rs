@@ -62,90 +62,19 @@ pub fn read(path: &Path) -> Result<Mesh, MeshReadError> {
 /// Parses the bytes of a mesh file; `path` is used for messages only.
 pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
     let p = path.display().to_string();
-    let version = header_version(bytes).ok_or_else(|| MeshReadError::NotMsh { path: p.clone() })?;
-    if !version.starts_with('4') {
-        return Err(MeshReadError::OldFormat { path: p, version });
-    }
-    if version != "4.1" {
-        return Err(MeshReadError::OldFormat { path: p, version });
-    }
-    // mshio panics on a data size other than 1, 2, 4, 8, 16 or one that overflows; gmsh writes
-    // sizeof(size_t), and the node-tag pass below reads 4 or 8.
-    if let Some(size) = header_data_size(bytes)
-        && !matches!(size.parse::<u64>(), Ok(4 | 8))
-    {
-        return Err(MeshReadError::Parse {
-            path: p,
-            detail: format!(
-                "the $MeshFormat data size is `{size}`; it must be 4 or 8 (sizeof(size_t))"
-            ),
-        });
-    }
+    check_header(bytes, &p)?;
     let names = physical_names(bytes, &p)?;
     let msh = mshio::parse_msh_bytes(bytes).map_err(|e| MeshReadError::Parse {
         path: p.clone(),
         detail: short_parse_error(&format!("{e}")),
     })?;
 
-    // Nodes.
-    let node_sec = msh.data.nodes.as_ref().ok_or(MeshReadError::Empty {
-        path: p.clone(),
-        what: "$Nodes section",
-    })?;
-    let file_tags =
-        node_tags_in_file_order(bytes, msh.header.file_type != 0, msh.header.size_t_size)
-            .ok_or_else(|| MeshReadError::Parse {
-                path: p.clone(),
-                detail: "cannot read the node tags of the $Nodes section".into(),
-            })?;
-    let mut nodes = Vec::new();
-    let mut node_tags = Vec::new();
-    let mut index_of: HashMap<u64, usize> = HashMap::new();
-    for block in &node_sec.node_blocks {
-        // mshio keeps the tags only when the whole section's tags are sparse; otherwise they
-        // come from our own pass over the section (`file_tags`), in file order.
-        let tags: Vec<u64> = match &block.node_tags {
-            Some(map) => {
-                let mut v = vec![0u64; block.nodes.len()];
-                for (&tag, &i) in map {
-                    v[i] = tag;
-                }
-                v
-            }
-            None => {
-                let start = nodes.len();
-                file_tags
-                    .get(start..start + block.nodes.len())
-                    .ok_or_else(|| MeshReadError::Parse {
-                        path: p.clone(),
-                        detail: "node tags of the $Nodes section do not match its blocks".into(),
-                    })?
-                    .to_vec()
-            }
-        };
-        for (node, tag) in block.nodes.iter().zip(tags) {
-            index_of.insert(tag, nodes.len());
-            nodes.push([node.x, node.y]);
-            node_tags.push(tag);
-        }
-    }
-    if nodes.is_empty() {
-        return Err(MeshReadError::Empty {
-            path: p,
-            what: "nodes",
-        });
-    }
-
-    // Entity → physical tags.
-    let mut entity_phys: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
-    if let Some(ent) = &msh.data.entities {
-        for c in &ent.curves {
-            entity_phys.insert((1, c.tag), c.physical_tags.clone());
-        }
-        for s in &ent.surfaces {
-            entity_phys.insert((2, s.tag), s.physical_tags.clone());
-        }
-    }
+    let NodeTable {
+        nodes,
+        node_tags,
+        index_of,
+    } = read_nodes(bytes, &msh, &p)?;
+    let entity_phys = entity_physical_tags(&msh);
 
     let mut mesh = Mesh {
         source: path.to_path_buf(),
@@ -168,75 +97,8 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
             .get(&(dim, block.entity_tag))
             .cloned()
             .unwrap_or_default();
-        if kind != 9 && kind != 8 {
-            let tag = block.elements.first().map_or(0, |e| e.element_tag);
-            let hint = match kind {
-                2 | 1 => {
-                    "; this is a first-order mesh: set `Mesh.ElementOrder = 2;` (and \
-                     `Mesh.SecondOrderLinear = 0;` for curved edges) and mesh again"
-                }
-                _ => "",
-            };
-            return Err(MeshReadError::UnsupportedElement {
-                path: p,
-                tag,
-                kind,
-                name: format!("{:?}", block.element_type),
-                hint,
-            });
-        }
-        // A group's element indices point into `triangles` or `lines` by its dimension, so the
-        // block's element type must match the dimension of its entity.
-        if dim != if kind == 9 { 2 } else { 1 } {
-            return Err(MeshReadError::Parse {
-                path: p,
-                detail: format!(
-                    "element block of gmsh type {kind} (first element {}) is on an entity of \
-                     dimension {dim}; 6-node triangles belong to surfaces (2), 3-node lines to \
-                     curves (1)",
-                    block.elements.first().map_or(0, |e| e.element_tag)
-                ),
-            });
-        }
-        let mut local = Vec::with_capacity(block.elements.len());
-        for el in &block.elements {
-            let idx = |t: u64| {
-                index_of.get(&t).copied().ok_or(MeshReadError::MissingNode {
-                    path: p.clone(),
-                    tag: el.element_tag,
-                    node: t,
-                })
-            };
-            // The element's nodes as mesh indices, checking the count.
-            let resolve = |want: usize| -> Result<Vec<usize>, MeshReadError> {
-                if el.nodes.len() != want {
-                    return Err(MeshReadError::Parse {
-                        path: p.clone(),
-                        detail: format!(
-                            "element {} has {} nodes, {want} expected",
-                            el.element_tag,
-                            el.nodes.len()
-                        ),
-                    });
-                }
-                el.nodes.iter().map(|&t| idx(t)).collect()
-            };
-            if kind == 9 {
-                let n = resolve(6)?;
-                local.push(mesh.triangles.len());
-                mesh.triangles.push(Tri6 {
-                    nodes: std::array::from_fn(|k| n[k]),
-                    tag: el.element_tag,
-                });
-            } else {
-                let n = resolve(3)?;
-                local.push(mesh.lines.len());
-                mesh.lines.push(Lin3 {
-                    nodes: std::array::from_fn(|k| n[k]),
-                    tag: el.element_tag,
-                });
-            }
-        }
+        check_block_type(block, &p)?;
+        let local = push_block_elements(&mut mesh, block, &index_of, &p)?;
         for ph in phys {
             let key = (dim, ph.abs());
             let gi = *group_index.entry(key).or_insert_with(|| {
@@ -278,7 +140,213 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
             });
         }
     }
-    // Clockwise triangles are reoriented so that every element is counter-clockwise.
+    reorient_clockwise(&mut mesh);
+    Ok(mesh)
+}
+
+/// Refuses anything but MSH 4.1 with a data size of 4 or 8.
+fn check_header(bytes: &[u8], p: &str) -> Result<(), MeshReadError> {
+    let version = header_version(bytes).ok_or_else(|| MeshReadError::NotMsh { path: p.into() })?;
+    if !version.starts_with('4') {
+        return Err(MeshReadError::OldFormat {
+            path: p.into(),
+            version,
+        });
+    }
+    if version != "4.1" {
+        return Err(MeshReadError::OldFormat {
+            path: p.into(),
+            version,
+        });
+    }
+    // mshio panics on a data size other than 1, 2, 4, 8, 16 or one that overflows; gmsh writes
+    // sizeof(size_t), and the node-tag pass below reads 4 or 8.
+    if let Some(size) = header_data_size(bytes)
+        && !matches!(size.parse::<u64>(), Ok(4 | 8))
+    {
+        return Err(MeshReadError::Parse {
+            path: p.into(),
+            detail: format!(
+                "the $MeshFormat data size is `{size}`; it must be 4 or 8 (sizeof(size_t))"
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The nodes of the `$Nodes` section in file order, their gmsh tags, and tag → index.
+struct NodeTable {
+    nodes: Vec<[f64; 2]>,
+    node_tags: Vec<u64>,
+    index_of: HashMap<u64, usize>,
+}
+
+/// Reads the `$Nodes` section (x, y and tag of every node); an empty section is an error.
+fn read_nodes(
+    bytes: &[u8],
+    msh: &mshio::MshFile<u64, i32, f64>,
+    p: &str,
+) -> Result<NodeTable, MeshReadError> {
+    let node_sec = msh.data.nodes.as_ref().ok_or(MeshReadError::Empty {
+        path: p.into(),
+        what: "$Nodes section",
+    })?;
+    let file_tags =
+        node_tags_in_file_order(bytes, msh.header.file_type != 0, msh.header.size_t_size)
+            .ok_or_else(|| MeshReadError::Parse {
+                path: p.into(),
+                detail: "cannot read the node tags of the $Nodes section".into(),
+            })?;
+    let mut nodes = Vec::new();
+    let mut node_tags = Vec::new();
+    let mut index_of: HashMap<u64, usize> = HashMap::new();
+    for block in &node_sec.node_blocks {
+        // mshio keeps the tags only when the whole section's tags are sparse; otherwise they
+        // come from our own pass over the section (`file_tags`), in file order.
+        let tags: Vec<u64> = match &block.node_tags {
+            Some(map) => {
+                let mut v = vec![0u64; block.nodes.len()];
+                for (&tag, &i) in map {
+                    v[i] = tag;
+                }
+                v
+            }
+            None => {
+                let start = nodes.len();
+                file_tags
+                    .get(start..start + block.nodes.len())
+                    .ok_or_else(|| MeshReadError::Parse {
+                        path: p.into(),
+                        detail: "node tags of the $Nodes section do not match its blocks".into(),
+                    })?
+                    .to_vec()
+            }
+        };
+        for (node, tag) in block.nodes.iter().zip(tags) {
+            index_of.insert(tag, nodes.len());
+            nodes.push([node.x, node.y]);
+            node_tags.push(tag);
+        }
+    }
+    if nodes.is_empty() {
+        return Err(MeshReadError::Empty {
+            path: p.into(),
+            what: "nodes",
+        });
+    }
+    Ok(NodeTable {
+        nodes,
+        node_tags,
+        index_of,
+    })
+}
+
+/// Entity → physical tags, for curves `(1, tag)` and surfaces `(2, tag)`.
+fn entity_physical_tags(msh: &mshio::MshFile<u64, i32, f64>) -> HashMap<(i32, i32), Vec<i32>> {
+    let mut entity_phys: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
+    if let Some(ent) = &msh.data.entities {
+        for c in &ent.curves {
+            entity_phys.insert((1, c.tag), c.physical_tags.clone());
+        }
+        for s in &ent.surfaces {
+            entity_phys.insert((2, s.tag), s.physical_tags.clone());
+        }
+    }
+    entity_phys
+}
+
+/// Refuses an element block that is not of 6-node triangles or 3-node lines, or whose type
+/// does not match the dimension of its entity.
+fn check_block_type(block: &mshio::ElementBlock<u64, i32>, p: &str) -> Result<(), MeshReadError> {
+    let kind = block.element_type as u8;
+    let dim = block.entity_dim;
+    if kind != 9 && kind != 8 {
+        let tag = block.elements.first().map_or(0, |e| e.element_tag);
+        let hint = match kind {
+            2 | 1 => {
+                "; this is a first-order mesh: set `Mesh.ElementOrder = 2;` (and \
+                 `Mesh.SecondOrderLinear = 0;` for curved edges) and mesh again"
+            }
+            _ => "",
+        };
+        return Err(MeshReadError::UnsupportedElement {
+            path: p.into(),
+            tag,
+            kind,
+            name: format!("{:?}", block.element_type),
+            hint,
+        });
+    }
+    // A group's element indices point into `triangles` or `lines` by its dimension, so the
+    // block's element type must match the dimension of its entity.
+    if dim != if kind == 9 { 2 } else { 1 } {
+        return Err(MeshReadError::Parse {
+            path: p.into(),
+            detail: format!(
+                "element block of gmsh type {kind} (first element {}) is on an entity of \
+                 dimension {dim}; 6-node triangles belong to surfaces (2), 3-node lines to \
+                 curves (1)",
+                block.elements.first().map_or(0, |e| e.element_tag)
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Appends the elements of a (checked) block to `mesh.triangles` or `mesh.lines`, resolving
+/// node tags to indices; returns their indices in that list.
+fn push_block_elements(
+    mesh: &mut Mesh,
+    block: &mshio::ElementBlock<u64, i32>,
+    index_of: &HashMap<u64, usize>,
+    p: &str,
+) -> Result<Vec<usize>, MeshReadError> {
+    let kind = block.element_type as u8;
+    let mut local = Vec::with_capacity(block.elements.len());
+    for el in &block.elements {
+        let idx = |t: u64| {
+            index_of.get(&t).copied().ok_or(MeshReadError::MissingNode {
+                path: p.into(),
+                tag: el.element_tag,
+                node: t,
+            })
+        };
+        // The element's nodes as mesh indices, checking the count.
+        let resolve = |want: usize| -> Result<Vec<usize>, MeshReadError> {
+            if el.nodes.len() != want {
+                return Err(MeshReadError::Parse {
+                    path: p.into(),
+                    detail: format!(
+                        "element {} has {} nodes, {want} expected",
+                        el.element_tag,
+                        el.nodes.len()
+                    ),
+                });
+            }
+            el.nodes.iter().map(|&t| idx(t)).collect()
+        };
+        if kind == 9 {
+            let n = resolve(6)?;
+            local.push(mesh.triangles.len());
+            mesh.triangles.push(Tri6 {
+                nodes: std::array::from_fn(|k| n[k]),
+                tag: el.element_tag,
+            });
+        } else {
+            let n = resolve(3)?;
+            local.push(mesh.lines.len());
+            mesh.lines.push(Lin3 {
+                nodes: std::array::from_fn(|k| n[k]),
+                tag: el.element_tag,
+            });
+        }
+    }
+    Ok(local)
+}
+
+/// Clockwise triangles are reoriented so that every element is counter-clockwise; their tags
+/// are recorded in `mesh.reoriented`.
+fn reorient_clockwise(mesh: &mut Mesh) {
     for i in 0..mesh.triangles.len() {
         let xe = mesh.tri_coords(i);
         if tri6::vertex_area(&xe) < 0.0 {
@@ -287,7 +355,6 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
             mesh.reoriented.push(t.tag);
         }
     }
-    Ok(mesh)
 }
 
 /// The version string of the `$MeshFormat` header, e.g. "4.1" or "2.2".

@@ -117,32 +117,11 @@ impl Model {
     ) -> Result<Model, ModelError> {
         let path = mesh.source.display().to_string();
         let bodies: Vec<&str> = case.bodies.iter().map(|b| b.group.as_str()).collect();
-        let mut curves: Vec<&str> = case.supports.iter().map(|s| s.group.as_str()).collect();
-        curves.extend(case.tractions.iter().map(|t| t.group.as_str()));
-        if let Some(p) = &case.pilot {
-            curves.push(&p.group);
-        }
-        if let Some(c) = &case.contact {
-            curves.push(&c.slave);
-            curves.push(&c.master);
-        }
+        let curves = boundary_groups(case);
         check::check(&mesh, &bodies, &curves)?;
 
-        let mut elems = Vec::new();
-        let mut elem_body = Vec::new();
-        for (bi, b) in case.bodies.iter().enumerate() {
-            let mat = Material { e: b.e, nu: b.nu };
-            for &e in &mesh.group(&b.group).expect("checked").elements {
-                elems.push((e, mat));
-                elem_body.push(bi);
-            }
-        }
-        let mut active = vec![false; mesh.nodes.len()];
-        for (e, _) in &elems {
-            for &n in &mesh.triangles[*e].nodes {
-                active[n] = true;
-            }
-        }
+        let (elems, elem_body) = body_elements(case, &mesh);
+        let active = active_nodes(&mesh, &elems);
         let tris: Vec<usize> = elems.iter().map(|(e, _)| *e).collect();
         let orient = EdgeOrientation::new(&mesh, &tris);
         // Every boundary group must lie on the active bodies.
@@ -159,145 +138,21 @@ impl Model {
         }
 
         // Contact: candidate zone and mortar operator, whose nodes are retained.
-        let mut tri_body = vec![usize::MAX; mesh.triangles.len()];
-        for ((e, _), &b) in elems.iter().zip(&elem_body) {
-            tri_body[*e] = b;
-        }
-        let pair = match &case.contact {
-            None => None,
-            Some(cs) => {
-                let perr = |source| ModelError::Contact {
-                    path: path.clone(),
-                    source,
-                };
-                let slave =
-                    crate::contact::oriented_edges(&mesh, &orient, &cs.slave).map_err(perr)?;
-                let master =
-                    crate::contact::oriented_edges(&mesh, &orient, &cs.master).map_err(perr)?;
-                let g = gap
-                    .or(cs.candidate_gap)
-                    .unwrap_or_else(|| crate::contact::default_candidate_gap(&mesh, &slave));
-                Some(
-                    crate::contact::build_pair(
-                        &mesh,
-                        &cs.slave,
-                        &cs.master,
-                        &slave,
-                        &master,
-                        g,
-                        cs.normal == crate::case::NormalKind::Common,
-                    )
-                    .map_err(perr)?,
-                )
-            }
-        };
-        let mut retained: Vec<usize> = Vec::new();
-        if let Some(p) = &pair {
-            let m = &p.mortar;
-            retained.extend(p.zone_edges.iter().flatten());
-            retained.extend(m.g_rows.iter().chain(&m.t_rows).flatten().map(|(n, _)| *n));
-            let mut seen = std::collections::HashSet::new();
-            retained.retain(|n| seen.insert(*n));
-        }
-        let e_star = pair.as_ref().map(|p| {
-            let body_of = |e: &[usize; 3]| {
-                orient
-                    .edge_triangle(e[0], e[1])
-                    .map(|t| tri_body[t])
-                    .expect("oriented edge")
-            };
-            let mb = p.mortar.master_nodes.first().and_then(|_| {
-                // The master body: the triangle adjacent to any master edge of the case group.
-                let cs = case.contact.as_ref().expect("pair implies contact");
-                crate::contact::oriented_edges(&mesh, &orient, &cs.master)
-                    .ok()
-                    .and_then(|v| v.first().map(body_of))
-            });
-            let sb = body_of(&p.zone_edges[0]);
-            let inv = |b: usize| (1.0 - case.bodies[b].nu.powi(2)) / case.bodies[b].e;
-            1.0 / (inv(sb) + inv(mb.unwrap_or(sb)))
-        });
-
-        let support_nodes: Vec<Vec<usize>> = case
-            .supports
-            .iter()
-            .map(|s| mesh.group_nodes(mesh.group(&s.group).expect("checked")))
-            .collect();
-        let supports: Vec<SupportSpec> = case
-            .supports
-            .iter()
-            .zip(&support_nodes)
-            .map(|(s, nodes)| SupportSpec {
-                group: &s.group,
-                nodes,
-                value: [s.ux, s.uy],
-            })
-            .collect();
-        let pilot_nodes = case
-            .pilot
+        let pair = contact_pair(case, &mesh, &orient, gap, &path)?;
+        let retained = retained_nodes(pair.as_ref());
+        let e_star = pair
             .as_ref()
-            .map(|p| mesh.group_nodes(mesh.group(&p.group).expect("checked")));
-        let dofs = DofMap::build(
-            &mesh.node_tags,
-            &active,
-            &supports,
-            case.pilot
-                .as_ref()
-                .map(|p| p.group.as_str())
-                .zip(pilot_nodes.as_deref()),
-            &retained,
-        )
-        .map_err(|source| ModelError::Dof {
-            path: path.clone(),
-            source,
-        })?;
+            .map(|p| pair_e_star(case, &mesh, &orient, &elems, &elem_body, p));
 
-        let pilot_separation = pilot_nodes.as_ref().zip(pair.as_ref()).and_then(|(pn, p)| {
-            let node_body = node_bodies(&mesh, &elems, &elem_body);
-            let bp = node_body[*pn.first()?];
-            let sb = node_body[p.zone_edges[0][0]];
-            let mb = node_body[*p.mortar.master_nodes.first()?];
-            let n = p.first_touch;
-            match held_by_supports(&mesh, &node_body, bp, &dofs).0 {
-                true => None,
-                false if bp == mb => Some((bp, n)),
-                false if bp == sb => Some((bp, [-n[0], -n[1]])),
-                false => None,
-            }
-        });
+        let (dofs, pilot_nodes) = number_dofs(case, &mesh, &active, &retained, &path)?;
+        let pilot_separation = pilot_nodes
+            .as_ref()
+            .zip(pair.as_ref())
+            .and_then(|(pn, p)| pilot_separation(&mesh, &elems, &elem_body, pn, p, &dofs));
         let t = Instant::now();
         let mut k = UpperCsc::pattern(&mesh, &elems, &dofs);
         let f_prescribed = assembly::assemble_stiffness(&mesh, &elems, &dofs, &mut k);
-        let mut f_traction = vec![0.0; dofs.n_free()];
-        for spec in &case.tractions {
-            let load = match spec.kind {
-                TractionKind::Uniform => Traction::Uniform {
-                    tx: spec.tx.unwrap_or(0.0),
-                    ty: spec.ty.unwrap_or(0.0),
-                },
-                TractionKind::Pressure => Traction::Pressure {
-                    p: spec.p.expect("validated"),
-                },
-                TractionKind::Hertz => Traction::Hertz {
-                    p0: spec.p0.expect("validated"),
-                    a: spec.a.expect("validated"),
-                    x0: spec.x0.unwrap_or(0.0),
-                },
-            };
-            let g = mesh.group(&spec.group).expect("checked");
-            for &l in &g.elements {
-                let nodes = orient.oriented_nodes(&mesh, l).expect("checked above");
-                let xe = nodes.map(|n| mesh.nodes[n]);
-                let fe = crate::loads::edge_forces(&xe, &load);
-                for a in 0..3 {
-                    for c in 0..2 {
-                        if let crate::dofs::Dof::Free(i) = dofs.node[nodes[a]][c] {
-                            f_traction[i] += fe[a][c];
-                        }
-                    }
-                }
-            }
-        }
+        let f_traction = traction_forces(case, &mesh, &orient, &dofs);
         timings.assemble = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
@@ -396,6 +251,229 @@ impl Model {
         }
         acc
     }
+}
+
+/// The curve groups the case names: supports, tractions, the pilot, then the contact pair
+/// (slave, master).
+fn boundary_groups(case: &Case) -> Vec<&str> {
+    let mut curves: Vec<&str> = case.supports.iter().map(|s| s.group.as_str()).collect();
+    curves.extend(case.tractions.iter().map(|t| t.group.as_str()));
+    if let Some(p) = &case.pilot {
+        curves.push(&p.group);
+    }
+    if let Some(c) = &case.contact {
+        curves.push(&c.slave);
+        curves.push(&c.master);
+    }
+    curves
+}
+
+/// The active triangles with their materials, body by body, and the body index of each.
+fn body_elements(case: &Case, mesh: &Mesh) -> (Vec<(usize, Material)>, Vec<usize>) {
+    let mut elems = Vec::new();
+    let mut elem_body = Vec::new();
+    for (bi, b) in case.bodies.iter().enumerate() {
+        let mat = Material { e: b.e, nu: b.nu };
+        for &e in &mesh.group(&b.group).expect("checked").elements {
+            elems.push((e, mat));
+            elem_body.push(bi);
+        }
+    }
+    (elems, elem_body)
+}
+
+/// Flags per mesh node: used by some active triangle.
+fn active_nodes(mesh: &Mesh, elems: &[(usize, Material)]) -> Vec<bool> {
+    let mut active = vec![false; mesh.nodes.len()];
+    for (e, _) in elems {
+        for &n in &mesh.triangles[*e].nodes {
+            active[n] = true;
+        }
+    }
+    active
+}
+
+/// The contact pair of the case (candidate zone and mortar operator), if it has a `contact`.
+fn contact_pair(
+    case: &Case,
+    mesh: &Mesh,
+    orient: &EdgeOrientation,
+    gap: Option<f64>,
+    path: &str,
+) -> Result<Option<crate::contact::Pair>, ModelError> {
+    let Some(cs) = &case.contact else {
+        return Ok(None);
+    };
+    let perr = |source| ModelError::Contact {
+        path: path.to_string(),
+        source,
+    };
+    let slave = crate::contact::oriented_edges(mesh, orient, &cs.slave).map_err(perr)?;
+    let master = crate::contact::oriented_edges(mesh, orient, &cs.master).map_err(perr)?;
+    let g = gap
+        .or(cs.candidate_gap)
+        .unwrap_or_else(|| crate::contact::default_candidate_gap(mesh, &slave));
+    Ok(Some(
+        crate::contact::build_pair(
+            mesh,
+            &cs.slave,
+            &cs.master,
+            &slave,
+            &master,
+            g,
+            cs.normal == crate::case::NormalKind::Common,
+        )
+        .map_err(perr)?,
+    ))
+}
+
+/// The nodes kept in the condensed system: those of the candidate zone and of the mortar rows,
+/// each once, in order of first appearance.
+fn retained_nodes(pair: Option<&crate::contact::Pair>) -> Vec<usize> {
+    let mut retained: Vec<usize> = Vec::new();
+    if let Some(p) = pair {
+        let m = &p.mortar;
+        retained.extend(p.zone_edges.iter().flatten());
+        retained.extend(m.g_rows.iter().chain(&m.t_rows).flatten().map(|(n, _)| *n));
+        let mut seen = std::collections::HashSet::new();
+        retained.retain(|n| seen.insert(*n));
+    }
+    retained
+}
+
+/// The composite modulus E* of the pair, from the slave body (of the first zone edge) and the
+/// master body (adjacent to the first master edge; the slave body if there is none).
+fn pair_e_star(
+    case: &Case,
+    mesh: &Mesh,
+    orient: &EdgeOrientation,
+    elems: &[(usize, Material)],
+    elem_body: &[usize],
+    p: &crate::contact::Pair,
+) -> f64 {
+    let mut tri_body = vec![usize::MAX; mesh.triangles.len()];
+    for ((e, _), &b) in elems.iter().zip(elem_body) {
+        tri_body[*e] = b;
+    }
+    let body_of = |e: &[usize; 3]| {
+        orient
+            .edge_triangle(e[0], e[1])
+            .map(|t| tri_body[t])
+            .expect("oriented edge")
+    };
+    let mb = p.mortar.master_nodes.first().and_then(|_| {
+        // The master body: the triangle adjacent to any master edge of the case group.
+        let cs = case.contact.as_ref().expect("pair implies contact");
+        crate::contact::oriented_edges(mesh, orient, &cs.master)
+            .ok()
+            .and_then(|v| v.first().map(body_of))
+    });
+    let sb = body_of(&p.zone_edges[0]);
+    let inv = |b: usize| (1.0 - case.bodies[b].nu.powi(2)) / case.bodies[b].e;
+    1.0 / (inv(sb) + inv(mb.unwrap_or(sb)))
+}
+
+/// Numbers the DOFs (supports, pilot, retained nodes); also returns the pilot's nodes.
+fn number_dofs(
+    case: &Case,
+    mesh: &Mesh,
+    active: &[bool],
+    retained: &[usize],
+    path: &str,
+) -> Result<(DofMap, Option<Vec<usize>>), ModelError> {
+    let support_nodes: Vec<Vec<usize>> = case
+        .supports
+        .iter()
+        .map(|s| mesh.group_nodes(mesh.group(&s.group).expect("checked")))
+        .collect();
+    let supports: Vec<SupportSpec> = case
+        .supports
+        .iter()
+        .zip(&support_nodes)
+        .map(|(s, nodes)| SupportSpec {
+            group: &s.group,
+            nodes,
+            value: [s.ux, s.uy],
+        })
+        .collect();
+    let pilot_nodes = case
+        .pilot
+        .as_ref()
+        .map(|p| mesh.group_nodes(mesh.group(&p.group).expect("checked")));
+    let dofs = DofMap::build(
+        &mesh.node_tags,
+        active,
+        &supports,
+        case.pilot
+            .as_ref()
+            .map(|p| p.group.as_str())
+            .zip(pilot_nodes.as_deref()),
+        retained,
+    )
+    .map_err(|source| ModelError::Dof {
+        path: path.to_string(),
+        source,
+    })?;
+    Ok((dofs, pilot_nodes))
+}
+
+/// [`Model::pilot_separation`]: when the pilot (on nodes `pn`) drives the slave or master body
+/// and no support holds that body, the body and the direction of pilot motion that opens the
+/// contact (the slave's outward normal at the first touch, reversed for the slave body).
+fn pilot_separation(
+    mesh: &Mesh,
+    elems: &[(usize, Material)],
+    elem_body: &[usize],
+    pn: &[usize],
+    p: &crate::contact::Pair,
+    dofs: &DofMap,
+) -> Option<(usize, [f64; 2])> {
+    let node_body = node_bodies(mesh, elems, elem_body);
+    let bp = node_body[*pn.first()?];
+    let sb = node_body[p.zone_edges[0][0]];
+    let mb = node_body[*p.mortar.master_nodes.first()?];
+    let n = p.first_touch;
+    match held_by_supports(mesh, &node_body, bp, dofs).0 {
+        true => None,
+        false if bp == mb => Some((bp, n)),
+        false if bp == sb => Some((bp, [-n[0], -n[1]])),
+        false => None,
+    }
+}
+
+/// Nodal forces (free DOFs) of the case's tractions at scale 1, edge by edge.
+fn traction_forces(case: &Case, mesh: &Mesh, orient: &EdgeOrientation, dofs: &DofMap) -> Vec<f64> {
+    let mut f_traction = vec![0.0; dofs.n_free()];
+    for spec in &case.tractions {
+        let load = match spec.kind {
+            TractionKind::Uniform => Traction::Uniform {
+                tx: spec.tx.unwrap_or(0.0),
+                ty: spec.ty.unwrap_or(0.0),
+            },
+            TractionKind::Pressure => Traction::Pressure {
+                p: spec.p.expect("validated"),
+            },
+            TractionKind::Hertz => Traction::Hertz {
+                p0: spec.p0.expect("validated"),
+                a: spec.a.expect("validated"),
+                x0: spec.x0.unwrap_or(0.0),
+            },
+        };
+        let g = mesh.group(&spec.group).expect("checked");
+        for &l in &g.elements {
+            let nodes = orient.oriented_nodes(mesh, l).expect("checked above");
+            let xe = nodes.map(|n| mesh.nodes[n]);
+            let fe = crate::loads::edge_forces(&xe, &load);
+            for a in 0..3 {
+                for c in 0..2 {
+                    if let crate::dofs::Dof::Free(i) = dofs.node[nodes[a]][c] {
+                        f_traction[i] += fe[a][c];
+                    }
+                }
+            }
+        }
+    }
+    f_traction
 }
 
 /// The body of each node (`usize::MAX` for nodes of no active triangle).

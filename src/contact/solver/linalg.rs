@@ -119,6 +119,26 @@ impl LuCache {
             self.factorise_block(w, &rows.unk)?;
         }
         let nk = self.k_unk.len();
+        let (b, special) = self.on_block(rows);
+        self.solve_g_columns(&special)?;
+        let llt = self.k_llt.as_ref()?;
+        let mut x0 = Mat::from_fn(nk, 1, |i, _| b[i]);
+        llt.solve_in_place(&mut x0);
+        let mut x: Vec<f64> = x0.col(0).iter().copied().collect();
+        let y_cap = if special.is_empty() {
+            Vec::new()
+        } else {
+            self.woodbury_correction(&special, &b, &mut x)?
+        };
+        let (xs, w_mu) = self.new_w_mu(w, rows, &b, &x, &special, &y_cap);
+        xs.iter().all(|v| v.is_finite()).then_some((xs, w_mu))
+    }
+
+    /// The system `rows` in the positions of the factorised block `K`: the right-hand side `b`
+    /// (zero on unknowns of `K` not in the system) and the special rows, followed by a row
+    /// `x_q = 0` for each unknown `q` of `K` not in the system.
+    fn on_block(&self, rows: &NewtonRows) -> (Vec<f64>, Vec<SpecialRow>) {
+        let nk = self.k_unk.len();
         let mut b = vec![0.0; nk];
         let mut in_system = vec![false; nk];
         for (r, &u) in rows.unk.iter().enumerate() {
@@ -147,7 +167,14 @@ impl LuCache {
             col: q,
             combo: Vec::new(),
         }));
+        (b, special)
+    }
+
+    /// Computes the columns `G = K⁻¹ e_q` of the special rows not computed yet; `None` if `K`
+    /// is not factorised.
+    fn solve_g_columns(&mut self, special: &[SpecialRow]) -> Option<()> {
         let llt = self.k_llt.as_ref()?;
+        let nk = self.k_unk.len();
         // Columns of G not computed yet, in one solve with several right-hand sides.
         let missing: Vec<usize> = special
             .iter()
@@ -164,72 +191,105 @@ impl LuCache {
                 self.k_cols[q] = e.col(c).iter().copied().collect();
             }
         }
-        let mut x0 = Mat::from_fn(nk, 1, |i, _| b[i]);
-        llt.solve_in_place(&mut x0);
-        let mut x: Vec<f64> = x0.col(0).iter().copied().collect();
+        Some(())
+    }
+
+    /// The Woodbury step from `x = x0 = K⁻¹ b`: solves `C y = B x0` and sets `x = x0 − G y`;
+    /// returns `y`, or `None` if `C` is near-singular.
+    fn woodbury_correction(
+        &self,
+        special: &[SpecialRow],
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Option<Vec<f64>> {
         let p = special.len();
-        let mut y_cap = Vec::new();
-        if p > 0 {
-            let mut cap = Mat::<f64>::zeros(p, p);
-            // Index in `special` of each row of K that is special.
-            let mut special_at = vec![None; nk];
-            for (i, si) in special.iter().enumerate() {
-                special_at[si.row] = Some(i);
-            }
-            let mut rhs = Mat::<f64>::zeros(p, 1);
-            // Size of the terms of each row: C is singular when A is, often by cancellation
-            // between large terms (a direction nothing holds), which its own pivots relative
-            // to each other do not show; relative to the terms they do.
-            let mut size = vec![0.0f64; p];
-            for (j, sj) in special.iter().enumerate() {
-                let g = &self.k_cols[sj.row];
-                for (i, si) in special.iter().enumerate() {
-                    let (t1, t2) = (si.alpha * g[si.row], si.gamma * g[si.col]);
-                    cap[(i, j)] = t1 + t2;
-                    size[i] = size[i].max(t1.abs() + t2.abs());
-                }
-                if sj.combo.is_empty() {
-                    cap[(j, j)] += sj.beta;
-                    rhs[(j, 0)] =
-                        sj.alpha * x[sj.row] + sj.gamma * x[sj.col] + (sj.beta - 1.0) * b[sj.row];
-                } else {
-                    // Σ c K_t G = Σ c (E_P)_t: unit entries where t is a special row.
-                    for &(t, c) in &sj.combo {
-                        if let Some(i) = special_at[t] {
-                            cap[(j, i)] += c;
-                        }
-                    }
-                    rhs[(j, 0)] = sj.alpha * x[sj.row]
-                        + sj.gamma * x[sj.col]
-                        + sj.combo.iter().map(|&(t, c)| c * b[t]).sum::<f64>()
-                        - b[sj.row];
-                }
-            }
-            for (i, si) in special.iter().enumerate() {
-                let k_part = if si.combo.is_empty() {
-                    si.beta.abs()
-                } else {
-                    si.combo.iter().map(|(_, c)| c.abs()).sum()
-                };
-                let scale = 1.0 / (size[i] + k_part).max(f64::MIN_POSITIVE);
-                for j in 0..p {
-                    cap[(i, j)] *= scale;
-                }
-                rhs[(i, 0)] *= scale;
-            }
-            let clu = cap.partial_piv_lu();
-            // Near-singular (gross sliding, a free direction): the dense system decides.
-            if (0..p).any(|i| clu.U()[(i, i)].abs() <= 1e-10) {
-                return None;
-            }
-            let y = clu.solve(&rhs);
-            y_cap = (0..p).map(|j| y[(j, 0)]).collect();
-            for (sj, yj) in special.iter().zip(&y_cap) {
-                for (xi, gi) in x.iter_mut().zip(&self.k_cols[sj.row]) {
-                    *xi -= gi * yj;
-                }
+        let (cap, rhs) = self.capacitance_system(special, b, x);
+        let clu = cap.partial_piv_lu();
+        // Near-singular (gross sliding, a free direction): the dense system decides.
+        if (0..p).any(|i| clu.U()[(i, i)].abs() <= 1e-10) {
+            return None;
+        }
+        let y = clu.solve(&rhs);
+        let y_cap: Vec<f64> = (0..p).map(|j| y[(j, 0)]).collect();
+        for (sj, yj) in special.iter().zip(&y_cap) {
+            for (xi, gi) in x.iter_mut().zip(&self.k_cols[sj.row]) {
+                *xi -= gi * yj;
             }
         }
+        Some(y_cap)
+    }
+
+    /// The capacitance system `C y = B x0` (`C = A_P G`, `x0` = `x`), each row scaled by the
+    /// size of its terms.
+    fn capacitance_system(
+        &self,
+        special: &[SpecialRow],
+        b: &[f64],
+        x: &[f64],
+    ) -> (Mat<f64>, Mat<f64>) {
+        let nk = self.k_unk.len();
+        let p = special.len();
+        let mut cap = Mat::<f64>::zeros(p, p);
+        // Index in `special` of each row of K that is special.
+        let mut special_at = vec![None; nk];
+        for (i, si) in special.iter().enumerate() {
+            special_at[si.row] = Some(i);
+        }
+        let mut rhs = Mat::<f64>::zeros(p, 1);
+        // Size of the terms of each row: C is singular when A is, often by cancellation
+        // between large terms (a direction nothing holds), which its own pivots relative
+        // to each other do not show; relative to the terms they do.
+        let mut size = vec![0.0f64; p];
+        for (j, sj) in special.iter().enumerate() {
+            let g = &self.k_cols[sj.row];
+            for (i, si) in special.iter().enumerate() {
+                let (t1, t2) = (si.alpha * g[si.row], si.gamma * g[si.col]);
+                cap[(i, j)] = t1 + t2;
+                size[i] = size[i].max(t1.abs() + t2.abs());
+            }
+            if sj.combo.is_empty() {
+                cap[(j, j)] += sj.beta;
+                rhs[(j, 0)] =
+                    sj.alpha * x[sj.row] + sj.gamma * x[sj.col] + (sj.beta - 1.0) * b[sj.row];
+            } else {
+                // Σ c K_t G = Σ c (E_P)_t: unit entries where t is a special row.
+                for &(t, c) in &sj.combo {
+                    if let Some(i) = special_at[t] {
+                        cap[(j, i)] += c;
+                    }
+                }
+                rhs[(j, 0)] = sj.alpha * x[sj.row]
+                    + sj.gamma * x[sj.col]
+                    + sj.combo.iter().map(|&(t, c)| c * b[t]).sum::<f64>()
+                    - b[sj.row];
+            }
+        }
+        for (i, si) in special.iter().enumerate() {
+            let k_part = if si.combo.is_empty() {
+                si.beta.abs()
+            } else {
+                si.combo.iter().map(|(_, c)| c.abs()).sum()
+            };
+            let scale = 1.0 / (size[i] + k_part).max(f64::MIN_POSITIVE);
+            for j in 0..p {
+                cap[(i, j)] *= scale;
+            }
+            rhs[(i, 0)] *= scale;
+        }
+        (cap, rhs)
+    }
+
+    /// The unknowns of `rows` (in its order) from the block solution `x`, and `W μ` of the new
+    /// iterate (all rows of `W`).
+    fn new_w_mu(
+        &self,
+        w: &Mat<f64>,
+        rows: &NewtonRows,
+        b: &[f64],
+        x: &[f64],
+        special: &[SpecialRow],
+        y_cap: &[f64],
+    ) -> (Vec<f64>, Vec<f64>) {
         // W μ of the new iterate, for the next iteration's sets: on this system's rows it is
         // what the rows impose, `K x = b − E_P y`, the others are products with W.
         let mut w_mu = vec![0.0; w.nrows()];
@@ -239,7 +299,7 @@ impl LuCache {
             in_unk[u] = true;
             w_mu[u] = b[self.k_pos[u]];
         }
-        for (sj, yj) in special.iter().zip(&y_cap) {
+        for (sj, yj) in special.iter().zip(y_cap) {
             let u = self.k_unk[sj.row];
             if in_unk[u] {
                 w_mu[u] -= yj;
@@ -251,7 +311,7 @@ impl LuCache {
                 *wi = rows.unk.iter().zip(&xs).map(|(&u, xu)| col[u] * xu).sum();
             }
         }
-        xs.iter().all(|v| v.is_finite()).then_some((xs, w_mu))
+        (xs, w_mu)
     }
 
     /// Factorises `K = W[unk, unk]` for [`Self::solve_rows`]; `None` if it is singular or not
