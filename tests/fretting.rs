@@ -5,7 +5,7 @@
 //! with `"history": "since_stick"` against the same law with the accumulated slip.
 
 mod common;
-use common::{CaseRun, run_case, shipped_case};
+use common::{CaseRun, run_case, shipped_case, validation_row};
 use serde_json::{Value, json};
 use stickslip::analytic::{Branch, CattaneoMindlin, Geometry, Hertz, Reversal};
 
@@ -103,6 +103,7 @@ fn fretting_loops_follow_mindlin_deresiewicz() {
     println!("worst: traction {worst_q:.4} μp0, stick zone {worst_c:.2} h");
     assert!(worst_q < TRACTION_TOL, "traction off by {worst_q} μp0");
     assert!(worst_c < STICK_TOL_ELEMENTS, "stick zone off by {worst_c} h");
+    let mut shakedown: f64 = 0.0;
     // The second cycle repeats the first (shakedown to a steady loop).
     for (branch, i) in [(Branch::Unloading, 20), (Branch::Reloading, 20)] {
         let (a, b) = (
@@ -118,12 +119,15 @@ fn fretting_loops_follow_mindlin_deresiewicz() {
             .map(|(x, y)| (x[sc] - y[sc]).abs())
             .fold(0.0, f64::max);
         assert!(d < 1e-9 * MU * h.p0, "{branch:?}: cycles differ by {d}");
+        shakedown = shakedown.max(d / (MU * h.p0));
     }
     // Energy: the balance closes to round-off, and each cycle's pilot work is dissipated.
     let e = &r.summary()["energy"];
     let bal = e["balance_relative"].as_f64().unwrap();
     println!("energy balance residual {bal:.2e} of the largest energy");
-    assert!(bal < 1e-11, "energy balance {bal}");
+    const BALANCE_TOL: f64 = 1e-11;
+    assert!(bal < BALANCE_TOL, "energy balance {bal}");
+    let mut work_vs_dissipation: f64 = 0.0;
     for c in e["per_cycle"].as_array().unwrap() {
         let (w, d) = (
             c["work_pilot"].as_f64().unwrap(),
@@ -131,7 +135,17 @@ fn fretting_loops_follow_mindlin_deresiewicz() {
         );
         println!("cycle {}: pilot work {w:.6e}, dissipation {d:.6e}", c["cycle"]);
         assert!(d > 0.0 && ((w - d) / d).abs() < 1e-8, "cycle {c}");
+        work_vs_dissipation = work_vs_dissipation.max(((w - d) / d).abs());
     }
+    validation_row(
+        "305-fretting",
+        "fretting, VM272 L4, μ = 0.2, Q cycled ±1.5 N/mm after P = 10 N/mm (`cases/fretting.json`, two cycles)",
+        "Mindlin–Deresiewicz load reversal (2-D); energy balance",
+        &format!(
+            "all {checked} steps of both branches: shear traction within {worst_q:.4} μp0 (asserted < {TRACTION_TOL}) outside two elements of the contact edge, of c′ and of c*; stick half-width within {worst_c:.2} elements (asserted < {STICK_TOL_ELEMENTS}); cycle 2 repeats cycle 1 to {shakedown:.0e} μp0 (asserted < 1e-9); energy balance residual {bal:.1e} of the largest energy (asserted < {BALANCE_TOL:.0e}); pilot work per cycle equals its dissipation to {work_vs_dissipation:.0e} (asserted < 1e-8)"
+        ),
+        "fretting",
+    );
 }
 
 /// Healing: under monotonic loading the two histories give the same answer; after a reversal
@@ -154,8 +168,14 @@ fn healing_restores_static_friction_after_a_stick() {
     // First loading: identical.
     let (a, b) = (acc.contact(11), heal.contact(11));
     assert_eq!(a.rows, b.rows, "monotonic loading must not depend on the history");
-    // One step into unloading: every contact node sticks at the turning point.
-    let step = step_of(&acc.history(), 1, Branch::Unloading, 1);
+    // The first converged step of unloading: every contact node sticks at the turning point.
+    let first_unloading = |r: &CaseRun| {
+        let h = r.history();
+        let st = h.col("stage");
+        h.rows.iter().find(|x| x[st] == 2.0).map(|x| x[0] as usize).unwrap()
+    };
+    let step = first_unloading(&acc);
+    assert_eq!(step, first_unloading(&heal));
     let (a, b) = (acc.contact(step), heal.contact(step));
     let (st, mu, smu, slip) = (
         a.col("status"),
