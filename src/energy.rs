@@ -238,10 +238,7 @@ impl EnergyMeter {
 
 /// The contact forces and `Y u` of a state (empty without contact).
 #[allow(clippy::type_complexity)]
-fn contact_snapshot(
-    model: &Model,
-    st: Option<&State>,
-) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+fn contact_snapshot(model: &Model, st: Option<&State>) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
     match (st, &model.contact) {
         (Some(st), Some(cm)) => {
             let g0 = &cm.system.gap0;
@@ -263,7 +260,8 @@ fn elastic_energy(model: &Model, u: &[f64]) -> (f64, Vec<f64>) {
             let nodes = &model.mesh.triangles[*e].nodes;
             let ue: [f64; 12] = std::array::from_fn(|i| dofs.displacement(nodes[i / 2], u)[i % 2]);
             let k = crate::elasticity::element_stiffness(&model.mesh.tri_coords(*e), mat);
-            let fe: [f64; 12] = std::array::from_fn(|i| (0..12).map(|j| k[i * 12 + j] * ue[j]).sum());
+            let fe: [f64; 12] =
+                std::array::from_fn(|i| (0..12).map(|j| k[i * 12 + j] * ue[j]).sum());
             (0.5 * (0..12).map(|i| ue[i] * fe[i]).sum::<f64>(), fe)
         })
         .collect();

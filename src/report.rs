@@ -435,8 +435,7 @@ pub fn summarise(
         newton_iterations,
         lu_factorisations,
         gmres_iterations,
-        peak_memory_mib: crate::output::peak_memory_bytes()
-            .map(|b| b as f64 / (1024.0 * 1024.0)),
+        peak_memory_mib: crate::output::peak_memory_bytes().map(|b| b as f64 / (1024.0 * 1024.0)),
         friction,
         checks,
         steps: records,

@@ -5,9 +5,9 @@
 use crate::case::Case;
 use crate::contact::solver::State;
 pub use crate::driver::{LogLevel, MAX_CUTBACKS, Simulation, StepEvent, simulate};
+use crate::energy::EnergyMeter;
 pub use crate::error::RunError;
 use crate::model::Model;
-use crate::energy::EnergyMeter;
 use crate::output::series::{Series, write_file};
 use crate::report::{Summary, end_summary, history_csv, print_warnings, summarise};
 use std::path::{Path, PathBuf};
@@ -142,8 +142,7 @@ pub fn run_model(
         &out_dir.join("history.csv"),
         history_csv(&sim.records).as_bytes(),
     )?;
-    let (mut summary, failure, lost_equilibrium) =
-        summarise(&model, case, case_path, out_dir, sim);
+    let (mut summary, failure, lost_equilibrium) = summarise(&model, case, case_path, out_dir, sim);
     if let Some(m) = &energy {
         write_file(&out_dir.join("energy.csv"), m.csv().as_bytes())?;
         summary.energy = m.summary();

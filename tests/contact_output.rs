@@ -9,20 +9,33 @@ use serde_json::json;
 #[test]
 fn contact_csv_and_vtu_hold_the_same_nodes() {
     let mut counts = Vec::new();
-    for (case, mesh) in [("vm272_cm.json", "vm272_L1.msh"), ("fig2.json", "vm272_L2.msh")] {
+    for (case, mesh) in [
+        ("vm272_cm.json", "vm272_L1.msh"),
+        ("fig2.json", "vm272_L2.msh"),
+    ] {
         let mut v = shipped_case_on(case, mesh);
         v["output"] = json!({"every": 1000});
         let r = run_case(&format!("contact-output-{case}"), &v, &["--quiet"]);
         r.assert_ok(case);
         let csv = r.last_contact();
         for col in [
-            "x", "y", "pressure", "shear", "gap", "slip", "slip_increment", "status", "mu",
-            "q_over_p", "slip_mu",
+            "x",
+            "y",
+            "pressure",
+            "shear",
+            "gap",
+            "slip",
+            "slip_increment",
+            "status",
+            "mu",
+            "q_over_p",
+            "slip_mu",
         ] {
             csv.col(col);
         }
         let step = r.history().rows.last().unwrap()[0] as usize;
-        let vtu = std::fs::read_to_string(r.out.join(format!("case_contact_{step:04}.vtu"))).unwrap();
+        let vtu =
+            std::fs::read_to_string(r.out.join(format!("case_contact_{step:04}.vtu"))).unwrap();
         let points: usize = vtu
             .split("NumberOfPoints=\"")
             .nth(1)
@@ -31,8 +44,15 @@ fn contact_csv_and_vtu_hold_the_same_nodes() {
             .unwrap();
         let (xc, xs) = (csv.col("x"), &csv.rows);
         let extent = xs.iter().map(|r| r[xc].abs()).fold(0.0, f64::max);
-        println!("{case} on {mesh}: CSV {} nodes over |x| ≤ {extent:.4}, VTU {points} points", xs.len());
-        assert_eq!(points, xs.len(), "{case}: the VTU and the CSV differ in nodes");
+        println!(
+            "{case} on {mesh}: CSV {} nodes over |x| ≤ {extent:.4}, VTU {points} points",
+            xs.len()
+        );
+        assert_eq!(
+            points,
+            xs.len(),
+            "{case}: the VTU and the CSV differ in nodes"
+        );
         counts.push(format!("{case} on {mesh}: {} and {points}", xs.len()));
     }
     validation_row(

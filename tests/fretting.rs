@@ -102,7 +102,10 @@ fn fretting_loops_follow_mindlin_deresiewicz() {
     println!("{checked} steps checked");
     println!("worst: traction {worst_q:.4} μp0, stick zone {worst_c:.2} h");
     assert!(worst_q < TRACTION_TOL, "traction off by {worst_q} μp0");
-    assert!(worst_c < STICK_TOL_ELEMENTS, "stick zone off by {worst_c} h");
+    assert!(
+        worst_c < STICK_TOL_ELEMENTS,
+        "stick zone off by {worst_c} h"
+    );
     let mut shakedown: f64 = 0.0;
     // The second cycle repeats the first (shakedown to a steady loop).
     for (branch, i) in [(Branch::Unloading, 20), (Branch::Reloading, 20)] {
@@ -133,7 +136,10 @@ fn fretting_loops_follow_mindlin_deresiewicz() {
             c["work_pilot"].as_f64().unwrap(),
             c["dissipation"].as_f64().unwrap(),
         );
-        println!("cycle {}: pilot work {w:.6e}, dissipation {d:.6e}", c["cycle"]);
+        println!(
+            "cycle {}: pilot work {w:.6e}, dissipation {d:.6e}",
+            c["cycle"]
+        );
         assert!(d > 0.0 && ((w - d) / d).abs() < 1e-8, "cycle {c}");
         work_vs_dissipation = work_vs_dissipation.max(((w - d) / d).abs());
     }
@@ -167,12 +173,19 @@ fn healing_restores_static_friction_after_a_stick() {
     let heal = fretting("fretting-heal", &law("since_stick"));
     // First loading: identical.
     let (a, b) = (acc.contact(11), heal.contact(11));
-    assert_eq!(a.rows, b.rows, "monotonic loading must not depend on the history");
+    assert_eq!(
+        a.rows, b.rows,
+        "monotonic loading must not depend on the history"
+    );
     // The first converged step of unloading: every contact node sticks at the turning point.
     let first_unloading = |r: &CaseRun| {
         let h = r.history();
         let st = h.col("stage");
-        h.rows.iter().find(|x| x[st] == 2.0).map(|x| x[0] as usize).unwrap()
+        h.rows
+            .iter()
+            .find(|x| x[st] == 2.0)
+            .map(|x| x[0] as usize)
+            .unwrap()
     };
     let step = first_unloading(&acc);
     assert_eq!(step, first_unloading(&heal));
@@ -187,7 +200,10 @@ fn healing_restores_static_friction_after_a_stick() {
     for (ra, rb) in a.rows.iter().zip(&b.rows) {
         if ra[st] == 1.0 && rb[st] == 1.0 && ra[slip] > 0.0 {
             weakened += 1;
-            assert!(ra[mu] < 0.2 - 1e-9, "accumulated keeps the weakened μ: {ra:?}");
+            assert!(
+                ra[mu] < 0.2 - 1e-9,
+                "accumulated keeps the weakened μ: {ra:?}"
+            );
             assert_eq!(rb[smu], 0.0, "since_stick restarts the slip μ sees");
             assert_eq!(rb[mu], 0.2, "a healed node is back at f_s");
             assert_eq!(ra[slip], rb[slip], "the accumulated slip is the same");
@@ -195,10 +211,17 @@ fn healing_restores_static_friction_after_a_stick() {
     }
     println!("{weakened} nodes weakened during first loading and healed at the turning point");
     assert!(weakened > 10, "only {weakened} weakened nodes");
-    let dissipation = |r: &CaseRun| r.summary()["energy"]["per_cycle"][0]["dissipation"].as_f64().unwrap();
+    let dissipation = |r: &CaseRun| {
+        r.summary()["energy"]["per_cycle"][0]["dissipation"]
+            .as_f64()
+            .unwrap()
+    };
     let (da, dh) = (dissipation(&acc), dissipation(&heal));
     println!("dissipation per cycle: accumulated {da:.6e}, since_stick {dh:.6e}");
-    assert!(dh > da, "healing must dissipate more in the first cycle: {dh} vs {da}");
+    assert!(
+        dh > da,
+        "healing must dissipate more in the first cycle: {dh} vs {da}"
+    );
 }
 
 /// Bad cycle groups: a clear message naming the key, exit status 2, nothing written.
@@ -206,11 +229,36 @@ fn healing_restores_static_friction_after_a_stick() {
 fn bad_cycle_groups_are_refused() {
     let stage = json!({"steps": 2, "pilot_x": {"force": 1.0}});
     for (name, item, needle) in [
-        ("zero", json!({"cycles": {"count": 0, "stages": [stage]}}), "stages[2].cycles.count must be at least 1"),
-        ("empty", json!({"cycles": {"count": 2, "stages": []}}), "stages[2].cycles.stages is empty"),
-        ("nested", json!({"cycles": {"count": 2, "stages": [{"cycles": {"count": 1, "stages": [stage]}}]}}), "do not nest"),
-        ("extra", json!({"cycles": {"count": 2, "stages": [stage]}, "steps": 3}), "nothing beside `cycles`"),
-        ("unknown", json!({"cycles": {"count": 2, "stages": [stage], "repeat": 1}}), "unknown field `repeat`"),
+        (
+            "zero",
+            json!({"cycles": {"count": 0, "stages": [stage]}}),
+            "stages[2].cycles.count must be at least 1",
+        ),
+        (
+            "empty",
+            json!({"cycles": {"count": 2, "stages": []}}),
+            "stages[2].cycles.stages is empty",
+        ),
+        (
+            "huge",
+            json!({"cycles": {"count": 1_000_000_000u64, "stages": [stage]}}),
+            "is too large",
+        ),
+        (
+            "nested",
+            json!({"cycles": {"count": 2, "stages": [{"cycles": {"count": 1, "stages": [stage]}}]}}),
+            "do not nest",
+        ),
+        (
+            "extra",
+            json!({"cycles": {"count": 2, "stages": [stage]}, "steps": 3}),
+            "nothing beside `cycles`",
+        ),
+        (
+            "unknown",
+            json!({"cycles": {"count": 2, "stages": [stage], "repeat": 1}}),
+            "unknown field `repeat`",
+        ),
     ] {
         let mut v = shipped_case("fretting.json");
         v["stages"][2] = item;
@@ -224,5 +272,9 @@ fn bad_cycle_groups_are_refused() {
     v["contact"]["friction"]["history"] = json!("forever");
     let r = run_case("fretting-bad-history", &v, &[]);
     assert_eq!(r.code, 2, "{}", r.stderr);
-    assert!(r.stderr.contains("history") && r.stderr.contains("since_stick"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("history") && r.stderr.contains("since_stick"),
+        "{}",
+        r.stderr
+    );
 }

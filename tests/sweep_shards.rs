@@ -105,7 +105,10 @@ fn three_shards_killed_resumed_and_merged_equal_the_unsharded_sweep() {
         let f = &row["friction"];
         let (fs, lam) = (f["f_s"].as_f64().unwrap(), f["lambda"].as_f64().unwrap());
         assert_eq!(fs, [0.15, 0.2][(r / 2) % 2], "row {r}");
-        assert!((lam / [0.025, 0.1][r % 2] - 1.0).abs() < 1e-9, "row {r}: Λ {lam}");
+        assert!(
+            (lam / [0.025, 0.1][r % 2] - 1.0).abs() < 1e-9,
+            "row {r}: Λ {lam}"
+        );
         let shape = serde_json::to_string(&f["law"]).unwrap();
         assert!(
             shape.contains(["ramp", "exponential"][(r / 4) % 2]),
@@ -125,13 +128,25 @@ fn three_shards_killed_resumed_and_merged_equal_the_unsharded_sweep() {
     // Shard 0 runs whole, numbered by Slurm's array task id.
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
         .args(["sweep", s.case.to_str().unwrap(), s.sweep.to_str().unwrap()])
-        .args(["--out", sh.to_str().unwrap(), "--shard", "slurm/3", "--quiet"])
+        .args([
+            "--out",
+            sh.to_str().unwrap(),
+            "--shard",
+            "slurm/3",
+            "--quiet",
+        ])
         .env("SLURM_ARRAY_TASK_ID", "0")
         .output()
         .unwrap();
-    let (code, err) = (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stderr));
+    let (code, err) = (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stderr),
+    );
     assert_eq!(code, 0, "{err}");
-    assert!(!sh.join("sweep.csv").exists(), "a shard writes its part only");
+    assert!(
+        !sh.join("sweep.csv").exists(),
+        "a shard writes its part only"
+    );
     // Shard 1 is killed once its part holds a row or two, then started again.
     let part1 = sh.join("part_1_of_3.jsonl");
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
@@ -221,12 +236,19 @@ fn bad_shards_and_merges_are_refused_and_write_nothing() {
             sweep(&s, &out, &["--shard", spec])
         };
         assert_eq!(code, 2, "--shard {spec}: {err}");
-        assert!(err.contains(needle) && err.contains(spec), "--shard {spec}: {err}");
+        assert!(
+            err.contains(needle) && err.contains(spec),
+            "--shard {spec}: {err}"
+        );
         assert!(!out.exists(), "--shard {spec} wrote {}", out.display());
     }
     // Empty grid lists, and laws given two ways.
     for (name, v, needle) in [
-        ("empty-fs", json!({"grid": {"f_s": [], "f_d": [0.1], "delta": [1e-3]}}), "grid.f_s"),
+        (
+            "empty-fs",
+            json!({"grid": {"f_s": [], "f_d": [0.1], "delta": [1e-3]}}),
+            "grid.f_s",
+        ),
         (
             "empty-load",
             json!({"grid": {"f_s": [0.2], "f_d": [0.1], "delta": [1e-3], "pilot_x": []}}),
@@ -254,7 +276,10 @@ fn bad_shards_and_merges_are_refused_and_write_nothing() {
             out.to_str().unwrap(),
         ]);
         assert_eq!(code, 2, "{name}: {err}");
-        assert!(err.contains(needle) && err.contains(&format!("{name}.json")), "{name}: {err}");
+        assert!(
+            err.contains(needle) && err.contains(&format!("{name}.json")),
+            "{name}: {err}"
+        );
         assert!(!out.exists(), "{name} wrote output");
     }
     // Two of three shards: the merge reports the missing rows and writes nothing.
@@ -276,7 +301,10 @@ fn bad_shards_and_merges_are_refused_and_write_nothing() {
     std::fs::write(&s.sweep, other.to_string()).unwrap();
     let (code, _, err) = sweep(&s, &sh, &["--shard", "0/3"]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("another sweep") && err.contains("--fresh"), "{err}");
+    assert!(
+        err.contains("another sweep") && err.contains("--fresh"),
+        "{err}"
+    );
     let elsewhere = s.dir.join("other");
     let (code, _, err) = sweep(&s, &elsewhere, &["--shard", "1/3", "--quiet"]);
     assert_eq!(code, 0, "{err}");

@@ -156,7 +156,6 @@ impl FrictionSpec {
     }
 }
 
-
 impl schemars::JsonSchema for FrictionSpec {
     fn schema_name() -> std::borrow::Cow<'static, str> {
         "FrictionSpec".into()

@@ -3,6 +3,10 @@
 use super::Stage;
 use serde::Deserialize;
 
+/// The largest cycle count of a group, and the most stages a case may expand to.
+const MAX_CYCLES: usize = 10_000;
+const MAX_STAGES: usize = 100_000;
+
 /// An item of the `stages` list: a stage, or a group of stages repeated (for the schema; the
 /// list is read by [`deserialize_stages`]).
 #[derive(schemars::JsonSchema)]
@@ -26,16 +30,19 @@ pub(super) struct CycleGroup {
 
 /// Reads the `stages` list, expanding cycle groups in place; a stage of cycle `k` (from 1)
 /// carries `cycle = k`.
-pub(super) fn deserialize_stages<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<Stage>, D::Error> {
+pub(super) fn deserialize_stages<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<Vec<Stage>, D::Error> {
     use serde::de::Error;
     let items = Vec::<serde_json::Value>::deserialize(d)?;
     let mut out = Vec::new();
     for (i, item) in items.into_iter().enumerate() {
         let group = item.as_object().and_then(|o| o.get("cycles")).cloned();
         match group {
-            None => out.push(serde_json::from_value::<Stage>(item).map_err(|e| {
-                D::Error::custom(format!("stages[{i}]: {e}"))
-            })?),
+            None => out.push(
+                serde_json::from_value::<Stage>(item)
+                    .map_err(|e| D::Error::custom(format!("stages[{i}]: {e}")))?,
+            ),
             Some(g) => {
                 if item.as_object().is_some_and(|o| o.len() > 1) {
                     return Err(D::Error::custom(format!(
@@ -55,6 +62,14 @@ pub(super) fn deserialize_stages<'de, D: serde::Deserializer<'de>>(d: D) -> Resu
                 if g.count == 0 {
                     return Err(D::Error::custom(format!(
                         "stages[{i}].cycles.count must be at least 1"
+                    )));
+                }
+                // Expanded before anything else is checked: bounded, so that a typo in the
+                // count cannot exhaust the memory.
+                if g.count > MAX_CYCLES || out.len() + g.count * g.stages.len() > MAX_STAGES {
+                    return Err(D::Error::custom(format!(
+                        "stages[{i}].cycles.count = {} is too large: at most {MAX_CYCLES} cycles and {MAX_STAGES} stages in all",
+                        g.count
                     )));
                 }
                 if g.stages.is_empty() {

@@ -86,7 +86,10 @@ pub fn simulate(
             max_iterations: c.max_iterations.unwrap_or(60),
             tolerance: c.tolerance.unwrap_or(1e-8),
             verbose: log >= LogLevel::Debug,
-            history: c.friction.as_ref().map_or_else(Default::default, |f| f.history),
+            history: c
+                .friction
+                .as_ref()
+                .map_or_else(Default::default, |f| f.history),
         }),
         cstate: model.contact.as_ref().map(|c| c.system.initial_state()),
         lu_cache: solver::LuCache::default(),
@@ -141,9 +144,7 @@ impl StageStart {
         );
         std::array::from_fn(|c| match (target[c], self.control[c]) {
             (Some(Control::Force(f)), _) => Control::Force(r0[c] + a * (f - r0[c])),
-            (Some(Control::Displacement(d)), _) => {
-                Control::Displacement(u0[c] + a * (d - u0[c]))
-            }
+            (Some(Control::Displacement(d)), _) => Control::Displacement(u0[c] + a * (d - u0[c])),
             (None, Control::Force(_)) => Control::Force(r0[c]),
             (None, Control::Displacement(_)) => Control::Displacement(u0[c]),
             (Some(Control::Slip(s)), _) => Control::Slip(m0 + a * (s - m0)),
@@ -319,7 +320,10 @@ impl Driver<'_> {
         older: &Option<(f64, State)>,
         hold: bool,
     ) -> Result<(State, Option<PilotState>, usize), Attempt> {
-        let opt = self.copt.as_ref().expect("a contact state comes with contact options");
+        let opt = self
+            .copt
+            .as_ref()
+            .expect("a contact state comes with contact options");
         let tc = Instant::now();
         let res = if !self.records.is_empty() && hold {
             // A step that changes no load (a hold) from a converged state: that state is its
@@ -337,7 +341,9 @@ impl Driver<'_> {
             let guess = older
                 .as_ref()
                 .filter(|(a0, _)| *a0 >= 0.0)
-                .map(|(a_old, old)| predict(prev, old, (a_new - alpha) / (alpha - a_old).max(1e-300)));
+                .map(|(a_old, old)| {
+                    predict(prev, old, (a_new - alpha) / (alpha - a_old).max(1e-300))
+                });
             self.model.solve_contact_step(
                 StepLoad {
                     scale,

@@ -59,4 +59,3 @@ pub(super) fn unheld_after(
     }
     None
 }
-

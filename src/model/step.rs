@@ -3,8 +3,8 @@
 //! displacement field of a contact state, and the contact figures (a, c, b, forces) of a state.
 
 use crate::case::Control;
-use crate::error::StepError;
 use crate::contact::solver::{self, ContactError, PilotDrive, State, Status};
+use crate::error::StepError;
 use crate::model::Model;
 use serde::Serialize;
 
@@ -201,8 +201,9 @@ impl Model {
             let fs = law.f_static();
             if fs > fd {
                 let tol = 1e-9 * (fs - fd);
-                fig.b =
-                    half_width(&|j| st.status[j] != Status::Open && law.mu(st.slip_mu[j]) > fd + tol);
+                fig.b = half_width(&|j| {
+                    st.status[j] != Status::Open && law.mu(st.slip_mu[j]) > fd + tol
+                });
             }
         }
         fig

@@ -116,8 +116,7 @@ pub fn expand(case: &Case, file: &SweepFile, path: &Path) -> Result<Rows, SweepE
     if laws.is_empty() && stage_lists.is_empty() {
         return Err(bad(
             "",
-            "neither `friction` (laws), `stages` (loads) nor `grid` lists anything to sweep"
-                .into(),
+            "neither `friction` (laws), `stages` (loads) nor `grid` lists anything to sweep".into(),
         ));
     }
     // One case per load, each checked like a case file (ranges, pilot, slip control).
@@ -139,8 +138,12 @@ pub fn expand(case: &Case, file: &SweepFile, path: &Path) -> Result<Rows, SweepE
     // Every law checked whole before anything is built (Δ from Λ scales with the pair's E*,
     // which does not change whether the law is valid).
     for (i, f) in laws.iter().enumerate() {
-        f.resolve(1.0)
-            .map_err(|e| bad(&format!("friction[{i}]"), format!("{e} (law {})", describe(f))))?;
+        f.resolve(1.0).map_err(|e| {
+            bad(
+                &format!("friction[{i}]"),
+                format!("{e} (law {})", describe(f)),
+            )
+        })?;
     }
     Ok(Rows { loads, laws })
 }
@@ -187,7 +190,10 @@ fn grid_laws_of(
         .clone()
         .unwrap_or_else(|| vec![crate::friction::History::Accumulated]);
     if histories.is_empty() {
-        return Err(bad("grid.history", "is empty: the grid has no point".into()));
+        return Err(bad(
+            "grid.history",
+            "is empty: the grid has no point".into(),
+        ));
     }
     let mut laws = Vec::new();
     for s in &shapes {

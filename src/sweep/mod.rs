@@ -261,7 +261,9 @@ pub fn table(rows: &[Value]) -> String {
             int(&r["steps"]),
             int(&r["newton_iterations"]),
             r["wall_s"].as_f64().unwrap_or(0.0),
-            f["resolved"].as_bool().map_or(String::new(), |b| b.to_string()),
+            f["resolved"]
+                .as_bool()
+                .map_or(String::new(), |b| b.to_string()),
             r["status"].as_str().unwrap_or("").replace('"', "'"),
             failed.join(";")
         );
@@ -336,8 +338,12 @@ pub fn sweep(
                         &sim.records,
                         friction.as_ref(),
                     );
-                    let (_, status) =
-                        judge(sim.failure, sim.lost_equilibrium, friction.as_ref(), &checks);
+                    let (_, status) = judge(
+                        sim.failure,
+                        sim.lost_equilibrium,
+                        friction.as_ref(),
+                        &checks,
+                    );
                     SweepRow {
                         row,
                         index,

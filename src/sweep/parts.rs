@@ -64,8 +64,8 @@ pub fn read_part(path: &Path) -> Result<Part, SweepError> {
         .ok_or_else(|| bad("the first line is not a part header".into()))?;
     let (mut rows, mut runs) = (BTreeMap::new(), Vec::new());
     for (i, line) in lines.enumerate() {
-        let v: Value = serde_json::from_str(line)
-            .map_err(|e| bad(format!("line {}: {e}", i + 2)))?;
+        let v: Value =
+            serde_json::from_str(line).map_err(|e| bad(format!("line {}: {e}", i + 2)))?;
         if let Some(run) = v.get("run") {
             runs.push(run.clone());
         } else {

@@ -287,5 +287,4 @@ impl ContactSystem {
         let col = self.w.col(i);
         w0[i] + (0..mu.len()).map(|j| col[j] * mu[j]).sum::<f64>()
     }
-
 }

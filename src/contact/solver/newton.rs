@@ -113,7 +113,15 @@ impl ContactSystem {
                     if opt.method != Method::AugmentedLagrangian
                         || self.penetration(&y, &status) <= opt.tolerance
                     {
-                        return Ok(self.finish(w0, &mu, &status, law, prev, (it, last_update), opt.history));
+                        return Ok(self.finish(
+                            w0,
+                            &mu,
+                            &status,
+                            law,
+                            prev,
+                            (it, last_update),
+                            opt.history,
+                        ));
                     }
                     // Outer update of the augmented Lagrangian: the multipliers move to the
                     // forces, and the penetration shrinks with each round.
