@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 /// One step's cumulative energies (from the unloaded state).
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, serde::Deserialize)]
 pub struct EnergyRow {
     pub step: usize,
     pub cycle: usize,
@@ -35,7 +35,7 @@ pub struct EnergyRow {
 }
 
 /// The energies of one cycle of a cycle group.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct CycleEnergy {
     pub cycle: usize,
     /// Work done by the pilot and frictional dissipation over the cycle.
@@ -64,6 +64,17 @@ struct Snapshot {
     /// `(Y u)_n` and `(Y u)_t` of the contact nodes.
     y_n: Vec<f64>,
     y_t: Vec<f64>,
+}
+
+/// What a restart needs of an [`EnergyMeter`] (the previous step's snapshot is rebuilt from
+/// the checkpoint).
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
+pub struct EnergySaved {
+    row: EnergyRow,
+    rows: Vec<EnergyRow>,
+    per_cycle: Vec<CycleEnergy>,
+    worst: f64,
+    size: f64,
 }
 
 /// Accumulates the energies of the converged steps of a run.
@@ -95,6 +106,45 @@ impl EnergyMeter {
             per_cycle: Vec::new(),
             worst: 0.0,
             size: 0.0,
+        }
+    }
+
+    /// What a restart needs to go on.
+    pub fn saved(&self) -> EnergySaved {
+        EnergySaved {
+            row: self.row.clone(),
+            rows: self.rows.clone(),
+            per_cycle: self.per_cycle.clone(),
+            worst: self.worst,
+            size: self.size,
+        }
+    }
+
+    /// A meter going on from `saved` after the checkpoint's step: the snapshot of that step is
+    /// recomputed from the checkpoint as the uninterrupted run computed it.
+    pub fn resume(model: &Model, saved: EnergySaved, c: &crate::driver::Checkpoint) -> Self {
+        let u = match (&c.last_u, &c.cstate) {
+            (Some(u), _) => u.clone(),
+            (None, Some(st)) => model.contact_displacement(c.scale, st),
+            (None, None) => vec![0.0; model.dofs.n_free()],
+        };
+        let p = c.records.last().and_then(|r| r.pilot).unwrap_or_default();
+        let (f_n, f_t, y_n, y_t) = contact_snapshot(model, c.cstate.as_ref());
+        EnergyMeter {
+            prev: Snapshot {
+                u,
+                scale: c.scale,
+                pilot: [p.ux, p.uy, p.fx, p.fy],
+                f_n,
+                f_t,
+                y_n,
+                y_t,
+            },
+            row: saved.row,
+            rows: saved.rows,
+            per_cycle: saved.per_cycle,
+            worst: saved.worst,
+            size: saved.size,
         }
     }
 

@@ -81,6 +81,8 @@ pub enum RunError {
         path: String,
         source: std::io::Error,
     },
+    #[error("--resume {path}: {why}")]
+    Resume { path: String, why: String },
     #[error(
         "the contact reached the edge of the candidate zone (candidate gap {gap:e}) at step {step}"
     )]
@@ -190,7 +192,7 @@ impl RunError {
     /// a force-controlled tangential load passes the largest load the contact can carry.
     pub fn exit_code(&self) -> i32 {
         match self {
-            RunError::Case(_) => 2,
+            RunError::Case(_) | RunError::Resume { .. } => 2,
             RunError::Model(e) => model_exit_code(e),
             RunError::Step(_)
             | RunError::Check(_)

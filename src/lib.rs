@@ -25,6 +25,7 @@ pub mod output;
 pub mod probe;
 pub mod quadrature;
 pub mod report;
+pub mod restart;
 pub mod run;
 pub mod shapes;
 pub mod sweep;

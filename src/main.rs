@@ -34,6 +34,10 @@ enum Cmd {
         /// Newton iteration).
         #[arg(long, value_enum, default_value = "info")]
         log: stickslip::run::LogLevel,
+        /// Go on from a saved state: a `state_NNNN.json` written with every written step, or
+        /// a directory (its latest state). The case file must be the one that wrote it.
+        #[arg(long)]
+        resume: Option<PathBuf>,
     },
     /// Run one case against many friction laws and/or loads on one shared model, in parallel,
     /// and write one table (CSV and JSON).
@@ -109,12 +113,18 @@ fn main() -> ExitCode {
             threads,
             quiet,
             log,
+            resume,
         } => {
             if let Err(e) = set_threads(threads) {
                 eprintln!("error: {e}");
                 return ExitCode::from(2);
             }
-            let opts = stickslip::run::RunOptions { out, quiet, log };
+            let opts = stickslip::run::RunOptions {
+                out,
+                quiet,
+                log,
+                resume,
+            };
             match stickslip::run::run(&case, &opts) {
                 Ok(_) => ExitCode::SUCCESS,
                 Err(e) => {

@@ -12,7 +12,7 @@ use serde::Serialize;
 use std::path::Path;
 
 /// One converged load step.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct StepRecord {
     pub step: usize,
     pub stage: usize,

@@ -4,7 +4,10 @@
 
 use crate::case::Case;
 use crate::contact::solver::State;
-pub use crate::driver::{LogLevel, MAX_CUTBACKS, Simulation, StepEvent, simulate};
+pub use crate::driver::{
+    LogLevel, MAX_CUTBACKS, Restart, Simulation, StepEvent, simulate, simulate_with,
+};
+use crate::restart::{self, SavedRun};
 use crate::energy::EnergyMeter;
 pub use crate::error::RunError;
 use crate::model::Model;
@@ -22,6 +25,8 @@ pub struct RunOptions {
     /// How much to print: errors; warnings; progress and the end summary (default); every
     /// Newton iteration.
     pub log: LogLevel,
+    /// Resume from a saved state (a `state_NNNN.json`, or a directory: its latest state).
+    pub resume: Option<PathBuf>,
 }
 
 impl RunOptions {
@@ -51,10 +56,26 @@ pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
                     .unwrap_or("case".into()),
             )
         });
-    let (mut gap, doublings) = (None, 8);
+    // A resumed run is checked before anything is built or written.
+    let mut resume = opts
+        .resume
+        .as_ref()
+        .map(|p| restart::load(p, &case, case_path))
+        .transpose()?;
+    let (mut gap, doublings) = (resume.as_ref().and_then(|s| s.candidate_gap), 8);
     for _ in 0..doublings {
         let model = Model::build_with_gap(&case, case_path, gap)?;
-        match run_model(&case, case_path, model, &out_dir, opts) {
+        let resumed = resume.is_some();
+        match run_model(&case, case_path, model, &out_dir, opts, resume.take()) {
+            Err(RunError::ZoneClipped { gap: g, step }) if resumed => {
+                return Err(RunError::Resume {
+                    path: opts.resume.as_ref().expect("resumed").display().to_string(),
+                    why: format!(
+                        "the contact reached the edge of the candidate zone at step {step} \
+                         (candidate gap {g:.3e}): run the case again from the start"
+                    ),
+                });
+            }
             Err(RunError::ZoneClipped { gap: g, step }) => {
                 if !opts.quiet {
                     eprintln!(
@@ -90,7 +111,17 @@ pub fn run_model(
     mut model: Model,
     out_dir: &Path,
     opts: &RunOptions,
+    resume: Option<SavedRun>,
 ) -> Result<Summary, RunError> {
+    if let (Some(s), Some(cm)) = (&resume, &model.contact)
+        && s.checkpoint.cstate.as_ref().is_some_and(|st| st.f_n.len() != cm.system.ns)
+    {
+        return Err(RunError::Resume {
+            path: opts.resume.clone().unwrap_or_default().display().to_string(),
+            why: "its contact state does not fit the model built from the case".into(),
+        });
+    }
+    let id = restart::run_id(case, case_path)?;
     std::fs::create_dir_all(out_dir).map_err(|source| RunError::Write {
         path: out_dir.display().to_string(),
         source,
@@ -104,9 +135,22 @@ pub fn run_model(
     let law = model.friction.clone();
     let mut series = Series::new(&model, case, out_dir, &stem);
     let mut energy = case.tracks_energy().then(|| EnergyMeter::new(&model));
+    let candidate_gap = model.contact.as_ref().map(|c| c.pair.candidate_gap);
+    let mut from = None;
+    if let Some(s) = resume {
+        series = series.with_entries(s.pvd);
+        if let Some(saved) = s.energy {
+            energy = Some(EnergyMeter::resume(&model, saved, &s.checkpoint));
+        }
+        from = Some(s.checkpoint);
+    }
+    let restart = Restart {
+        every: Some(case.output.every),
+        from,
+    };
     // The last converged step not yet written (`output.every` > 1).
     let mut unwritten: Option<Unwritten> = None;
-    let sim = simulate(&model, case, law.as_ref(), level, &mut |ev: &StepEvent| {
+    let mut on_step = |ev: &StepEvent| {
         progress.step(ev);
         if let Some(m) = energy.as_mut() {
             m.step(&model, ev);
@@ -116,7 +160,25 @@ pub fn run_model(
         }
         if ev.step.is_multiple_of(case.output.every) || ev.last {
             unwritten = None;
-            series.write_step(ev.step, ev.time, ev.scale, ev.u, ev.contact)
+            series.write_step(ev.step, ev.time, ev.scale, ev.u, ev.contact)?;
+            // The state to resume from, after the step's files.
+            if let Some(c) = ev.checkpoint {
+                let saved = SavedRun {
+                    format: restart::FORMAT,
+                    id: id.clone(),
+                    candidate_gap,
+                    checkpoint: c.clone(),
+                    pvd: series.entries().to_vec(),
+                    energy: energy.as_ref().map(EnergyMeter::saved),
+                };
+                write_file(
+                    &out_dir.join(restart::state_name(ev.step)),
+                    serde_json::to_string(&saved)
+                        .expect("serialisable")
+                        .as_bytes(),
+                )?;
+            }
+            Ok(())
         } else {
             // Kept so that a run that stops early still writes its last converged state.
             unwritten = Some(Unwritten {
@@ -128,7 +190,8 @@ pub fn run_model(
             });
             Ok(())
         }
-    })?;
+    };
+    let sim = simulate_with(&model, case, law.as_ref(), level, &mut on_step, restart)?;
     if let Some(w) = unwritten.take()
         && sim.failure.is_some()
     {

@@ -42,6 +42,8 @@ pub struct StepEvent<'a> {
     pub contact: Option<&'a State>,
     /// The record of this step.
     pub record: &'a StepRecord,
+    /// The driver's state after this step, when it is a checkpoint ([`Restart::every`]).
+    pub checkpoint: Option<&'a Checkpoint>,
 }
 
 /// What [`simulate`] returns.
@@ -75,6 +77,51 @@ pub fn simulate(
     log: LogLevel,
     on_step: &mut dyn FnMut(&StepEvent) -> Result<(), RunError>,
 ) -> Result<Simulation, RunError> {
+    simulate_with(model, case, law, log, on_step, Restart::default())
+}
+
+/// Checkpoints of a run and where it resumes.
+#[derive(Default)]
+pub struct Restart {
+    /// Hand a [`Checkpoint`] to the caller with every `n`-th step (and the last), and forget
+    /// the contact solver's cached factorisations after it, so that a run resumed from it
+    /// computes bit for bit what the uninterrupted run computes.
+    pub every: Option<usize>,
+    /// Resume from this checkpoint instead of the unloaded state.
+    pub from: Option<Checkpoint>,
+}
+
+/// Everything the driver needs to go on from a converged step exactly as it would have.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct Checkpoint {
+    pub stage: usize,
+    start: StageStart,
+    pub alpha: f64,
+    dalpha: f64,
+    older: Option<(f64, State)>,
+    pub cstate: Option<State>,
+    control: [Control; 2],
+    pilot: PilotState,
+    pub scale: f64,
+    pub records: Vec<StepRecord>,
+    newton_total: usize,
+    factorisations: usize,
+    gmres_iterations: usize,
+    bracket: Option<(f64, f64)>,
+    pub last_u: Option<Vec<f64>>,
+    t_solve: f64,
+    t_contact: f64,
+}
+
+/// [`simulate`] with checkpoints and resumption.
+pub fn simulate_with(
+    model: &Model,
+    case: &Case,
+    law: Option<&FrictionLaw>,
+    log: LogLevel,
+    on_step: &mut dyn FnMut(&StepEvent) -> Result<(), RunError>,
+    restart: Restart,
+) -> Result<Simulation, RunError> {
     let mut d = Driver {
         model,
         case,
@@ -104,9 +151,12 @@ pub fn simulate(
         bracket: None,
         lost_equilibrium: None,
         last_u: None,
+        checkpoint_every: restart.every,
     };
-    for (si, stage) in case.stages.iter().enumerate() {
-        if !d.run_stage(si, stage, on_step)? {
+    let mut resume = restart.from.map(|c| d.restore(c));
+    let first = resume.as_ref().map_or(0, |r| r.0);
+    for (si, stage) in case.stages.iter().enumerate().skip(first) {
+        if !d.run_stage(si, stage, on_step, resume.take().map(|r| r.1))? {
             break;
         }
     }
@@ -126,7 +176,7 @@ pub fn simulate(
 }
 
 /// The committed loads at the start of a stage, from which its steps interpolate.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 struct StageStart {
     pilot: PilotState,
     scale: f64,
@@ -196,7 +246,12 @@ struct Driver<'a> {
     bracket: Option<(f64, f64)>,
     lost_equilibrium: Option<(f64, f64)>,
     last_u: Option<Vec<f64>>,
+    checkpoint_every: Option<usize>,
 }
+
+/// Where a stage resumes: its start, the load fraction reached, the next increment and the
+/// predictor's older state.
+type StagePosition = (StageStart, f64, f64, Option<(f64, State)>);
 
 impl Driver<'_> {
     /// Runs the steps of stage `si`; `false` when the run stops (a failure is recorded).
@@ -205,18 +260,22 @@ impl Driver<'_> {
         si: usize,
         stage: &Stage,
         on_step: &mut dyn FnMut(&StepEvent) -> Result<(), RunError>,
+        resume: Option<StagePosition>,
     ) -> Result<bool, RunError> {
-        let start = StageStart {
-            pilot: self.pilot,
-            scale: self.scale,
-            control: self.control,
-            mean_slip: self.cstate.as_ref().map_or(0.0, |s| s.mean_slip),
-        };
-        let target = [stage.pilot_x, stage.pilot_y];
         let nominal = 1.0 / stage.steps as f64;
-        let (mut alpha, mut dalpha) = (0.0, nominal);
         // The state before the last converged one, with its load fraction (none across stages).
-        let mut older: Option<(f64, State)> = None;
+        let (start, mut alpha, mut dalpha, mut older) = resume.unwrap_or((
+            StageStart {
+                pilot: self.pilot,
+                scale: self.scale,
+                control: self.control,
+                mean_slip: self.cstate.as_ref().map_or(0.0, |s| s.mean_slip),
+            },
+            0.0,
+            nominal,
+            None,
+        ));
+        let target = [stage.pilot_x, stage.pilot_y];
         let mut cutbacks = 0;
         // A stage that changes no load (a hold): every step of it keeps the converged state.
         let hold = start.is_hold(target, stage.traction_scale);
@@ -288,22 +347,50 @@ impl Driver<'_> {
             self.t_solve += wall;
             let last = si + 1 == self.case.stages.len() && alpha >= 1.0 - 1e-12;
             self.record(si, alpha, iterations, cutbacks, wall);
+            // The cutback count is per step: the next step starts afresh.
+            cutbacks = 0;
+            if dalpha < nominal {
+                dalpha = (2.0 * dalpha).min(nominal);
+            }
+            let has_u = u.is_some();
+            if has_u {
+                self.last_u = u;
+            }
+            let checkpoint = self
+                .checkpoint_every
+                .filter(|n| step.is_multiple_of(*n) || last)
+                .map(|_| Checkpoint {
+                    stage: si,
+                    start,
+                    alpha,
+                    dalpha,
+                    older: older.clone(),
+                    cstate: self.cstate.clone(),
+                    control: self.control,
+                    pilot: self.pilot,
+                    scale: self.scale,
+                    records: self.records.clone(),
+                    newton_total: self.newton_total,
+                    factorisations: self.lu_cache.factorisations,
+                    gmres_iterations: self.lu_cache.gmres_iterations,
+                    bracket: self.bracket,
+                    last_u: self.last_u.clone(),
+                    t_solve: self.t_solve,
+                    t_contact: self.t_contact,
+                });
             on_step(&StepEvent {
                 step,
                 time: si as f64 + alpha,
                 scale: sc,
                 last,
-                u: u.as_ref(),
+                u: if has_u { self.last_u.as_ref() } else { None },
                 contact: self.cstate.as_ref(),
                 record: self.records.last().expect("pushed above"),
+                checkpoint: checkpoint.as_ref(),
             })?;
-            if u.is_some() {
-                self.last_u = u;
-            }
-            // The cutback count is per step: the next step starts afresh.
-            cutbacks = 0;
-            if dalpha < nominal {
-                dalpha = (2.0 * dalpha).min(nominal);
+            if checkpoint.is_some() {
+                // A resumed run starts with no cached factorisation: so does this one.
+                self.lu_cache.clear();
             }
         }
         Ok(true)
@@ -400,6 +487,23 @@ impl Driver<'_> {
         {
             self.bracket = Some((self.pilot.fx, f));
         }
+    }
+
+    /// Takes over the state of checkpoint `c`; returns the stage it resumes in and where.
+    fn restore(&mut self, c: Checkpoint) -> (usize, StagePosition) {
+        self.cstate = c.cstate;
+        self.control = c.control;
+        self.pilot = c.pilot;
+        self.scale = c.scale;
+        self.records = c.records;
+        self.newton_total = c.newton_total;
+        self.lu_cache.factorisations = c.factorisations;
+        self.lu_cache.gmres_iterations = c.gmres_iterations;
+        self.bracket = c.bracket;
+        self.last_u = c.last_u;
+        self.t_solve = c.t_solve;
+        self.t_contact = c.t_contact;
+        (c.stage, (c.start, c.alpha, c.dalpha, c.older))
     }
 
     /// Records why the run stops at `step`; returns `false` (the stage loop's "stop").

@@ -9,7 +9,7 @@ use crate::model::Model;
 use serde::Serialize;
 
 /// The state of the pilot after a step.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
+#[derive(Clone, Copy, Debug, Default, Serialize, serde::Deserialize)]
 pub struct PilotState {
     pub ux: f64,
     pub uy: f64,
@@ -18,7 +18,7 @@ pub struct PilotState {
 }
 
 /// Figures of the contact after a step.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
+#[derive(Clone, Copy, Debug, Default, Serialize, serde::Deserialize)]
 pub struct ContactFigures {
     /// Nodes in contact, in stick, in slip.
     pub n_contact: usize,

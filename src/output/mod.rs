@@ -28,6 +28,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 }
 
 /// One dataset of a `.pvd` collection.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct PvdEntry {
     pub time: f64,
     /// 0 for the bodies, 1 for the contact surface.

@@ -42,6 +42,17 @@ impl<'a> Series<'a> {
         }
     }
 
+    /// Goes on with the `.pvd` entries of an earlier run (a restart).
+    pub fn with_entries(mut self, entries: Vec<PvdEntry>) -> Self {
+        self.entries = entries;
+        self
+    }
+
+    /// The `.pvd` entries written so far.
+    pub fn entries(&self) -> &[PvdEntry] {
+        &self.entries
+    }
+
     /// Writes the files of one converged step and rewrites the `.pvd`: the bodies' fields from
     /// the free solution `u` or, with contact, recovered from the contact state.
     pub fn write_step(

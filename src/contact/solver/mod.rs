@@ -60,7 +60,7 @@ pub enum Method {
 }
 
 /// Contact state of a slave node.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
     Open,
@@ -91,7 +91,7 @@ pub enum PilotDrive {
 }
 
 /// The converged contact state after a step (and the committed history).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct State {
     pub f_n: Vec<f64>,
     pub f_t: Vec<f64>,

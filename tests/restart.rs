@@ -1,0 +1,189 @@
+//! Exact restart: a fretting run (two cycles, L3, a state with every 10th step) killed
+//! part-way and resumed with `--resume DIR`, and one whose files after step 40 were deleted
+//! and resumed from `state_0040.json`, write what the uninterrupted run writes, file for file
+//! and byte for byte apart from the timings; a state from another case, a directory without a
+//! state and a corrupt state are refused with nothing written.
+
+mod common;
+use common::{mesh_path, shipped_case, stickslip, tempdir, validation_row};
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+
+const TIMING_KEYS: [&str; 7] = [
+    "timings_s",
+    "contact_solve_s",
+    "peak_memory_mib",
+    "wall_s",
+    "output_dir",
+    "t_solve",
+    "t_contact",
+];
+
+fn strip(v: &mut Value) {
+    match v {
+        Value::Object(m) => {
+            for k in TIMING_KEYS {
+                m.remove(k);
+            }
+            m.values_mut().for_each(strip);
+        }
+        Value::Array(a) => a.iter_mut().for_each(strip),
+        _ => {}
+    }
+}
+
+/// Files of `a` and `b` that differ (JSON without timings, CSV without `wall_s`, the rest byte
+/// for byte), and the files compared.
+fn differences(a: &Path, b: &Path) -> (Vec<String>, usize) {
+    let names = |d: &Path| {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+            .collect();
+        v.sort();
+        v
+    };
+    let (na, nb) = (names(a), names(b));
+    assert_eq!(na, nb, "the two runs wrote different files");
+    let mut diff = Vec::new();
+    for n in &na {
+        let (pa, pb) = (a.join(n), b.join(n));
+        let same = if n.ends_with(".json") {
+            let mut va: Value = serde_json::from_str(&std::fs::read_to_string(&pa).unwrap()).unwrap();
+            let mut vb: Value = serde_json::from_str(&std::fs::read_to_string(&pb).unwrap()).unwrap();
+            strip(&mut va);
+            strip(&mut vb);
+            va == vb
+        } else if n.ends_with(".csv") {
+            let cols = |p: &PathBuf| -> Vec<Vec<String>> {
+                let t = std::fs::read_to_string(p).unwrap();
+                let rows: Vec<Vec<String>> =
+                    t.lines().map(|l| l.split(',').map(String::from).collect()).collect();
+                match rows[0].iter().position(|h| h == "wall_s") {
+                    Some(k) => rows
+                        .into_iter()
+                        .map(|mut r| {
+                            r.remove(k);
+                            r
+                        })
+                        .collect(),
+                    None => rows,
+                }
+            };
+            cols(&pa) == cols(&pb)
+        } else {
+            std::fs::read(&pa).unwrap() == std::fs::read(&pb).unwrap()
+        };
+        if !same {
+            diff.push(n.clone());
+        }
+    }
+    (diff, na.len())
+}
+
+fn write_case(dir: &Path) -> PathBuf {
+    let mut v = shipped_case("fretting.json");
+    v["mesh"] = mesh_path("vm272_L3.msh");
+    v["stages"][2]["cycles"]["count"] = json!(2);
+    v["output"] = json!({"every": 10});
+    let path = dir.join("case.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    path
+}
+
+fn run(case: &Path, out: &Path, extra: &[&str]) -> (i32, String) {
+    let mut args = vec!["run", case.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"];
+    args.extend_from_slice(extra);
+    let (code, _, err) = stickslip(&args);
+    (code, err)
+}
+
+#[test]
+fn a_resumed_run_writes_what_the_uninterrupted_run_writes() {
+    let dir = tempdir("restart");
+    let case = write_case(&dir);
+    let whole = dir.join("whole");
+    let (code, err) = run(&case, &whole, &[]);
+    assert_eq!(code, 0, "{err}");
+
+    // Killed part-way (once a state past step 30 exists), then resumed from the directory.
+    let killed = dir.join("killed");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args(["run", case.to_str().unwrap(), "--out", killed.to_str().unwrap()])
+        .args(["--quiet", "--threads", "1"])
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while !killed.join("state_0040.json").exists() && t0.elapsed().as_secs() < 120 {
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let kept = (1..=9)
+        .filter(|k| killed.join(format!("state_{:04}.json", 10 * k)).exists())
+        .count();
+    println!("killed with {kept} states written");
+    let (code, err) = run(&case, &killed, &["--resume", killed.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let (diff, files) = differences(&whole, &killed);
+    assert!(diff.is_empty(), "the resumed run differs in {diff:?}");
+
+    // Everything after step 40 deleted, resumed from its state file.
+    let cut = dir.join("cut");
+    let (code, err) = run(&case, &cut, &[]);
+    assert_eq!(code, 0, "{err}");
+    for e in std::fs::read_dir(&cut).unwrap() {
+        let p = e.unwrap().path();
+        let name = p.file_name().unwrap().to_string_lossy().to_string();
+        let step: Option<usize> = name
+            .trim_end_matches(|c: char| !c.is_ascii_digit())
+            .rsplit(|c: char| !c.is_ascii_digit())
+            .next()
+            .and_then(|s| s.parse().ok());
+        if step.is_some_and(|s| s > 40) || !name.contains('_') || name.ends_with(".pvd") {
+            std::fs::remove_file(&p).unwrap();
+        }
+    }
+    let state = cut.join("state_0040.json");
+    let (code, err) = run(&case, &cut, &["--resume", state.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let (diff2, _) = differences(&whole, &cut);
+    assert!(diff2.is_empty(), "the run resumed at step 40 differs in {diff2:?}");
+    validation_row(
+        "316-restart",
+        "exact restart: fretting, two cycles, L3, a state every 10th step; one run killed part-way, one cut after step 40, both resumed",
+        "the uninterrupted run",
+        &format!(
+            "all {files} files (VTU, contact CSV, `history.csv`, `energy.csv`, `summary.json`, states) equal, JSON and CSV apart from wall times (killed with {kept} states written)"
+        ),
+        "restart",
+    );
+}
+
+#[test]
+fn bad_states_are_refused_and_nothing_is_written() {
+    let dir = tempdir("restart-bad");
+    let case = write_case(&dir);
+    let src = dir.join("src");
+    let (code, err) = run(&case, &src, &[]);
+    assert_eq!(code, 0, "{err}");
+    // A state of another case (the same case with another load) is refused.
+    let mut other: Value = serde_json::from_str(&std::fs::read_to_string(&case).unwrap()).unwrap();
+    other["stages"][1]["pilot_x"] = json!({"force": 1.4});
+    let other_case = dir.join("other.json");
+    std::fs::write(&other_case, other.to_string()).unwrap();
+    let state = src.join("state_0040.json");
+    for (name, case, resume, needle) in [
+        ("foreign", &other_case, state.clone(), "another case"),
+        ("empty-dir", &case, dir.join("nothing"), "holds no state"),
+        ("corrupt", &case, dir.join("corrupt.json"), "not a stickslip state file"),
+    ] {
+        std::fs::create_dir_all(dir.join("nothing")).unwrap();
+        std::fs::write(dir.join("corrupt.json"), "{\"format\": 1, \"id\": ").unwrap();
+        let out = dir.join(format!("out-{name}"));
+        let (code, err) = run(case, &out, &["--resume", resume.to_str().unwrap()]);
+        assert_eq!(code, 2, "{name}: {err}");
+        assert!(err.contains(needle) && err.contains("--resume"), "{name}: {err}");
+        assert!(!out.exists(), "{name} wrote output");
+    }
+}
