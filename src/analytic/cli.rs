@@ -387,6 +387,18 @@ pub struct LawArgs {
     /// Also evaluate f(u) and df/du at this slip (mm).
     #[arg(long)]
     pub u: Option<f64>,
+    /// Which slip u is (as a case's `"history"`): the accumulated slip path, or the slip since
+    /// the node last stuck (healing).
+    #[arg(long, value_enum, default_value = "accumulated")]
+    pub history: HistoryArg,
+}
+
+/// The `--history` of `law`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum HistoryArg {
+    Accumulated,
+    #[value(name = "since_stick", alias = "since-stick")]
+    SinceStick,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -599,6 +611,27 @@ fn run_law(l: &LawArgs, out: &mut dyn Write) -> CliResult<()> {
         v["mu_u"] = json!(law.mu(u));
         v["dmu_du"] = json!(law.dmu_du(u));
     }
+    let weakens = law.f_dynamic().is_ok_and(|fd| fd < law.f_static());
+    let (name, note) = match (l.history, weakens) {
+        (_, false) => (
+            "accumulated",
+            "the law does not weaken: the history makes no difference".to_string(),
+        ),
+        (HistoryArg::Accumulated, true) => (
+            "accumulated",
+            "u is the total slip path of a point: weakening is permanent".to_string(),
+        ),
+        (HistoryArg::SinceStick, true) => (
+            "since_stick",
+            format!(
+                "u is the slip since the point last stuck or was out of contact: a point that \
+                 sticks regains f_s = {}; under monotonic loading the same as accumulated",
+                law.f_static()
+            ),
+        ),
+    };
+    v["history"] = json!(name);
+    v["history_note"] = json!(note);
     print_json(out, &v)
 }
 
