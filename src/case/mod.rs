@@ -11,7 +11,8 @@ mod friction_spec;
 mod stages;
 
 pub use friction_spec::{FrictionKind, FrictionSpec};
-use stages::{StageItem, deserialize_stages};
+pub(crate) use stages::deserialize_stages;
+use stages::StageItem;
 use std::path::{Path, PathBuf};
 
 /// A whole case.

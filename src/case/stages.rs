@@ -30,7 +30,7 @@ pub(super) struct CycleGroup {
 
 /// Reads the `stages` list, expanding cycle groups in place; a stage of cycle `k` (from 1)
 /// carries `cycle = k`.
-pub(super) fn deserialize_stages<'de, D: serde::Deserializer<'de>>(
+pub(crate) fn deserialize_stages<'de, D: serde::Deserializer<'de>>(
     d: D,
 ) -> Result<Vec<Stage>, D::Error> {
     use serde::de::Error;

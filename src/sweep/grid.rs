@@ -17,13 +17,18 @@ pub struct SweepFile {
     /// Friction laws, each as a case's `contact.friction`.
     #[serde(default)]
     pub friction: Vec<FrictionSpec>,
-    /// Loads, each a whole replacement of the case's `stages`.
+    /// Loads, each a whole replacement of the case's `stages` (cycle groups included).
     #[serde(default)]
-    pub stages: Vec<Vec<Stage>>,
+    pub stages: Vec<StageList>,
     /// Value lists whose Cartesian product is the sweep.
     #[serde(default)]
     pub grid: Option<Grid>,
 }
+
+/// A list of stages as in a case file, cycle groups expanded.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(transparent)]
+pub struct StageList(#[serde(deserialize_with = "crate::case::deserialize_stages")] pub Vec<Stage>);
 
 /// A grid of laws (shape × f_s × f_d × Δ or Λ) and loads (the last stage's `pilot_x`).
 #[derive(Debug, Deserialize)]
@@ -111,7 +116,7 @@ pub fn expand(case: &Case, file: &SweepFile, path: &Path) -> Result<Rows, SweepE
                 })
                 .collect()
         }
-        None => file.stages.clone(),
+        None => file.stages.iter().map(|s| s.0.clone()).collect(),
     };
     if laws.is_empty() && stage_lists.is_empty() {
         return Err(bad(
