@@ -40,6 +40,7 @@ CONTACT_POINT = {
     "status": 1,
     "mu": 1,
     "q_over_p": 1,
+    "slip_mu": 1,
     "traction": 3,
     "normal": 3,
 }
