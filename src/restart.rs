@@ -67,13 +67,17 @@ pub fn load(path: &Path, case: &Case, case_path: &Path) -> Result<SavedRun, RunE
     } else {
         path.to_path_buf()
     };
-    let text = std::fs::read_to_string(&file).map_err(|e| bad(&file, format!("cannot read it: {e}")))?;
+    let text =
+        std::fs::read_to_string(&file).map_err(|e| bad(&file, format!("cannot read it: {e}")))?;
     let saved: SavedRun = serde_json::from_str(&text)
         .map_err(|e| bad(&file, format!("not a stickslip state file ({e})")))?;
     if saved.format != FORMAT {
         return Err(bad(
             &file,
-            format!("state format {} (this program reads {FORMAT})", saved.format),
+            format!(
+                "state format {} (this program reads {FORMAT})",
+                saved.format
+            ),
         ));
     }
     let id = run_id(case, case_path)?;
@@ -97,7 +101,11 @@ fn latest(dir: &Path) -> Option<PathBuf> {
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter_map(|p| {
             let n = p.file_name()?.to_str()?.to_string();
-            let step: usize = n.strip_prefix("state_")?.strip_suffix(".json")?.parse().ok()?;
+            let step: usize = n
+                .strip_prefix("state_")?
+                .strip_suffix(".json")?
+                .parse()
+                .ok()?;
             Some((step, p))
         })
         .max_by_key(|(s, _)| *s)

@@ -7,12 +7,12 @@ use crate::contact::solver::State;
 pub use crate::driver::{
     LogLevel, MAX_CUTBACKS, Restart, Simulation, StepEvent, simulate, simulate_with,
 };
-use crate::restart::{self, SavedRun};
 use crate::energy::EnergyMeter;
 pub use crate::error::RunError;
 use crate::model::Model;
 use crate::output::series::{Series, write_file};
 use crate::report::{Summary, end_summary, history_csv, print_warnings, summarise};
+use crate::restart::{self, SavedRun};
 use std::path::{Path, PathBuf};
 
 /// Options of a run from the command line.
@@ -114,10 +114,18 @@ pub fn run_model(
     resume: Option<SavedRun>,
 ) -> Result<Summary, RunError> {
     if let (Some(s), Some(cm)) = (&resume, &model.contact)
-        && s.checkpoint.cstate.as_ref().is_some_and(|st| st.f_n.len() != cm.system.ns)
+        && s.checkpoint
+            .cstate
+            .as_ref()
+            .is_some_and(|st| st.f_n.len() != cm.system.ns)
     {
         return Err(RunError::Resume {
-            path: opts.resume.clone().unwrap_or_default().display().to_string(),
+            path: opts
+                .resume
+                .clone()
+                .unwrap_or_default()
+                .display()
+                .to_string(),
             why: "its contact state does not fit the model built from the case".into(),
         });
     }

@@ -559,8 +559,12 @@ fn cli_bad_parameters() {
     let out = cli(r#"law --json {"shape":"table","rows":[[0,0.2],[1,0.1]]}"#).unwrap();
     assert!(out.contains("does not settle"), "{out}");
     // The history a case may give the law: named, and explained where it matters.
-    let out = cli("law --shape ramp --fs 0.2 --fd 0.15 --delta 2e-4 --history since_stick").unwrap();
-    assert!(out.contains(r#""history": "since_stick""#) && out.contains("regains f_s = 0.2"), "{out}");
+    let out =
+        cli("law --shape ramp --fs 0.2 --fd 0.15 --delta 2e-4 --history since_stick").unwrap();
+    assert!(
+        out.contains(r#""history": "since_stick""#) && out.contains("regains f_s = 0.2"),
+        "{out}"
+    );
     let out = cli("law --shape constant --fs 0.2 --history since_stick").unwrap();
     assert!(out.contains("makes no difference"), "{out}");
 }

@@ -49,16 +49,20 @@ fn differences(a: &Path, b: &Path) -> (Vec<String>, usize) {
     for n in &na {
         let (pa, pb) = (a.join(n), b.join(n));
         let same = if n.ends_with(".json") {
-            let mut va: Value = serde_json::from_str(&std::fs::read_to_string(&pa).unwrap()).unwrap();
-            let mut vb: Value = serde_json::from_str(&std::fs::read_to_string(&pb).unwrap()).unwrap();
+            let mut va: Value =
+                serde_json::from_str(&std::fs::read_to_string(&pa).unwrap()).unwrap();
+            let mut vb: Value =
+                serde_json::from_str(&std::fs::read_to_string(&pb).unwrap()).unwrap();
             strip(&mut va);
             strip(&mut vb);
             va == vb
         } else if n.ends_with(".csv") {
             let cols = |p: &PathBuf| -> Vec<Vec<String>> {
                 let t = std::fs::read_to_string(p).unwrap();
-                let rows: Vec<Vec<String>> =
-                    t.lines().map(|l| l.split(',').map(String::from).collect()).collect();
+                let rows: Vec<Vec<String>> = t
+                    .lines()
+                    .map(|l| l.split(',').map(String::from).collect())
+                    .collect();
                 match rows[0].iter().position(|h| h == "wall_s") {
                     Some(k) => rows
                         .into_iter()
@@ -92,7 +96,13 @@ fn write_case(dir: &Path) -> PathBuf {
 }
 
 fn run(case: &Path, out: &Path, extra: &[&str]) -> (i32, String) {
-    let mut args = vec!["run", case.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"];
+    let mut args = vec![
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ];
     args.extend_from_slice(extra);
     let (code, _, err) = stickslip(&args);
     (code, err)
@@ -109,7 +119,12 @@ fn a_resumed_run_writes_what_the_uninterrupted_run_writes() {
     // Killed part-way (once a state past step 30 exists), then resumed from the directory.
     let killed = dir.join("killed");
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args(["run", case.to_str().unwrap(), "--out", killed.to_str().unwrap()])
+        .args([
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            killed.to_str().unwrap(),
+        ])
         .args(["--quiet", "--threads", "1"])
         .spawn()
         .unwrap();
@@ -148,7 +163,10 @@ fn a_resumed_run_writes_what_the_uninterrupted_run_writes() {
     let (code, err) = run(&case, &cut, &["--resume", state.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     let (diff2, _) = differences(&whole, &cut);
-    assert!(diff2.is_empty(), "the run resumed at step 40 differs in {diff2:?}");
+    assert!(
+        diff2.is_empty(),
+        "the run resumed at step 40 differs in {diff2:?}"
+    );
     validation_row(
         "316-restart",
         "exact restart: fretting, two cycles, L3, a state every 10th step; one run killed part-way, one cut after step 40, both resumed",
@@ -176,14 +194,22 @@ fn bad_states_are_refused_and_nothing_is_written() {
     for (name, case, resume, needle) in [
         ("foreign", &other_case, state.clone(), "another case"),
         ("empty-dir", &case, dir.join("nothing"), "holds no state"),
-        ("corrupt", &case, dir.join("corrupt.json"), "not a stickslip state file"),
+        (
+            "corrupt",
+            &case,
+            dir.join("corrupt.json"),
+            "not a stickslip state file",
+        ),
     ] {
         std::fs::create_dir_all(dir.join("nothing")).unwrap();
         std::fs::write(dir.join("corrupt.json"), "{\"format\": 1, \"id\": ").unwrap();
         let out = dir.join(format!("out-{name}"));
         let (code, err) = run(case, &out, &["--resume", resume.to_str().unwrap()]);
         assert_eq!(code, 2, "{name}: {err}");
-        assert!(err.contains(needle) && err.contains("--resume"), "{name}: {err}");
+        assert!(
+            err.contains(needle) && err.contains("--resume"),
+            "{name}: {err}"
+        );
         assert!(!out.exists(), "{name} wrote output");
     }
 }

@@ -11,8 +11,8 @@ mod friction_spec;
 mod stages;
 
 pub use friction_spec::{FrictionKind, FrictionSpec};
-pub(crate) use stages::deserialize_stages;
 use stages::StageItem;
+pub(crate) use stages::deserialize_stages;
 use std::path::{Path, PathBuf};
 
 /// A whole case.
