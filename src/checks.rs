@@ -24,7 +24,6 @@
 use crate::contact::solver::{State, Status};
 use crate::model::Model;
 use crate::report::{FrictionSummary, StepRecord};
-use rayon::prelude::*;
 use serde::Serialize;
 
 /// How much a check matters when it fails.
@@ -164,18 +163,11 @@ fn equilibrium(inp: &Input) -> Check {
     let dofs = &model.dofs;
     // Each element's nodal forces and the size of the terms summed into them.
     let (per_elem, terms): (Vec<[f64; 12]>, Vec<f64>) = model
-        .elems
-        .par_iter()
-        .map(|(e, mat)| {
-            let nodes = &model.mesh.triangles[*e].nodes;
-            let ue: [f64; 12] =
-                std::array::from_fn(|i| dofs.displacement(nodes[i / 2], inp.u)[i % 2]);
-            let k = crate::elasticity::element_stiffness(&model.mesh.tri_coords(*e), mat);
-            let fe: [f64; 12] =
-                std::array::from_fn(|i| (0..12).map(|j| k[i * 12 + j] * ue[j]).sum());
-            let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            let umax = ue.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            (fe, kmax * umax)
+        .element_forces(inp.u)
+        .into_iter()
+        .map(|f| {
+            let umax = f.ue.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            (f.fe, f.kmax * umax)
         })
         .unzip();
     let term = terms.iter().fold(0.0f64, |m, &v| m.max(v));

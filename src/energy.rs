@@ -16,7 +16,6 @@ use crate::contact::solver::State;
 use crate::dofs::Dof;
 use crate::driver::StepEvent;
 use crate::model::Model;
-use rayon::prelude::*;
 use serde::Serialize;
 
 /// One step's cumulative energies (from the unloaded state).
@@ -303,22 +302,11 @@ fn contact_snapshot(model: &Model, st: Option<&State>) -> (Vec<f64>, Vec<f64>, V
 /// reaction at each prescribed DOF (the element forces summed there).
 fn elastic_energy(model: &Model, u: &[f64]) -> (f64, Vec<f64>) {
     let dofs = &model.dofs;
-    let per_elem: Vec<(f64, [f64; 12])> = model
-        .elems
-        .par_iter()
-        .map(|(e, mat)| {
-            let nodes = &model.mesh.triangles[*e].nodes;
-            let ue: [f64; 12] = std::array::from_fn(|i| dofs.displacement(nodes[i / 2], u)[i % 2]);
-            let k = crate::elasticity::element_stiffness(&model.mesh.tri_coords(*e), mat);
-            let fe: [f64; 12] =
-                std::array::from_fn(|i| (0..12).map(|j| k[i * 12 + j] * ue[j]).sum());
-            (0.5 * (0..12).map(|i| ue[i] * fe[i]).sum::<f64>(), fe)
-        })
-        .collect();
     let mut reactions = vec![0.0; dofs.prescribed.len()];
     let mut energy = 0.0;
-    for ((e, _), (ue, fe)) in model.elems.iter().zip(&per_elem) {
-        energy += ue;
+    for ((e, _), f) in model.elems.iter().zip(model.element_forces(u)) {
+        let fe = f.fe;
+        energy += 0.5 * (0..12).map(|i| f.ue[i] * fe[i]).sum::<f64>();
         for (a, &n) in model.mesh.triangles[*e].nodes.iter().enumerate() {
             for c in 0..2 {
                 if let Dof::Fixed(k) = dofs.node[n][c] {

@@ -38,7 +38,7 @@ pub fn run_id(case: &Case, case_path: &Path) -> Result<String, RunError> {
             why: format!("cannot read it: {e}"),
         })
     };
-    Ok(crate::sweep::parts::sweep_id(&[
+    Ok(crate::output::content_id(&[
         &read(case_path)?,
         &read(&case.mesh_path(case_path))?,
         env!("CARGO_PKG_VERSION").as_bytes(),

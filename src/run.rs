@@ -152,8 +152,9 @@ pub fn run_model(
         }
         from = Some(s.checkpoint);
     }
+    // States go with the written steps: none when nothing is written.
     let restart = Restart {
-        every: Some(case.output.every),
+        every: case.output.vtu.then_some(case.output.every),
         from,
     };
     // The last converged step not yet written (`output.every` > 1).

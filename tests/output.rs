@@ -60,7 +60,15 @@ fn vtu_holds_every_documented_array_with_finite_values() {
     assert_eq!(summary["status"], "completed");
     // Every phase is reported, and the phases (disjoint parts of the run) add up to no more
     // than the process took from the outside: a phase counted twice would exceed it.
-    let phases = ["read", "assemble", "analyse", "factorise", "condense", "solve", "write"];
+    let phases = [
+        "read",
+        "assemble",
+        "analyse",
+        "factorise",
+        "condense",
+        "solve",
+        "write",
+    ];
     let sum: f64 = phases
         .iter()
         .map(|k| {
@@ -70,7 +78,10 @@ fn vtu_holds_every_documented_array_with_finite_values() {
         })
         .sum();
     println!("phases add up to {sum:.3} s of the process's {process_s:.3} s");
-    assert!(sum <= process_s, "phases {sum} s exceed the process's {process_s} s");
+    assert!(
+        sum <= process_s,
+        "phases {sum} s exceed the process's {process_s} s"
+    );
     assert!(summary["peak_memory_mib"].as_f64().unwrap() > 0.0);
 }
 

@@ -47,7 +47,34 @@ pub struct StepLoad {
     pub control: [Control; 2],
 }
 
+/// One element's nodal displacements and internal forces `K_e u_e`, and the largest entry of
+/// `K_e` (the size of the terms summed into the forces).
+pub struct ElementForces {
+    pub ue: [f64; 12],
+    pub fe: [f64; 12],
+    pub kmax: f64,
+}
+
 impl Model {
+    /// The nodal displacements and internal forces of every element for the free solution `u`
+    /// (prescribed values included), in the order of `self.elems`.
+    pub fn element_forces(&self, u: &[f64]) -> Vec<ElementForces> {
+        use rayon::prelude::*;
+        self.elems
+            .par_iter()
+            .map(|(e, mat)| {
+                let nodes = &self.mesh.triangles[*e].nodes;
+                let ue: [f64; 12] =
+                    std::array::from_fn(|i| self.dofs.displacement(nodes[i / 2], u)[i % 2]);
+                let k = crate::elasticity::element_stiffness(&self.mesh.tri_coords(*e), mat);
+                let fe: [f64; 12] =
+                    std::array::from_fn(|i| (0..12).map(|j| k[i * 12 + j] * ue[j]).sum());
+                let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                ElementForces { ue, fe, kmax }
+            })
+            .collect()
+    }
+
     /// Solves one load step without contact: tractions at `scale`, the pilot driven by
     /// `control`. Returns the free solution vector and the pilot state (if there is a pilot).
     pub fn solve_step(

@@ -27,6 +27,26 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     })
 }
 
+/// A stable 64-bit FNV-1a hash of byte strings (each prefixed by its length), as hex: the
+/// identity of a run or a sweep (its case file, mesh file, sweep file, program version),
+/// which restart states and sweep parts carry.
+pub fn content_id(parts: &[&[u8]]) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |b: u8| {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    };
+    for p in parts {
+        for b in (p.len() as u64).to_le_bytes() {
+            eat(b);
+        }
+        for &b in *p {
+            eat(b);
+        }
+    }
+    format!("{h:016x}")
+}
+
 /// One dataset of a `.pvd` collection.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct PvdEntry {

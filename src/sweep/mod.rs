@@ -102,7 +102,7 @@ pub fn run(case_path: &Path, sweep_path: &Path, opts: &SweepOptions) -> Result<(
     }
     let (k, n) = opts.shard.unwrap_or((0, 1));
     let total = rows.len();
-    let id = parts::sweep_id(&[
+    let id = crate::output::content_id(&[
         &read(case_path)?,
         &read(&case.mesh_path(case_path))?,
         &sweep_bytes,
@@ -127,16 +127,7 @@ pub fn run(case_path: &Path, sweep_path: &Path, opts: &SweepOptions) -> Result<(
     });
     let part_path = out_dir.join(parts::part_name(k, n));
     // A part of another sweep is refused before the model is built.
-    if part_path.exists() && !opts.fresh {
-        let part = parts::read_part(&part_path)?;
-        if part.header["sweep_id"] != header["sweep_id"] {
-            return Err(SweepError::ForeignPart {
-                path: part_path.display().to_string(),
-                found: part.header["sweep_id"].as_str().unwrap_or("?").to_string(),
-                expected: id,
-            });
-        }
-    }
+    let existing = parts::PartWriter::existing(&part_path, &header, opts.fresh)?;
     let t = Instant::now();
     let model = Model::build(&case, case_path)?;
     let e_star = model.contact.as_ref().map(|c| c.e_star).expect("contact");
@@ -158,7 +149,7 @@ pub fn run(case_path: &Path, sweep_path: &Path, opts: &SweepOptions) -> Result<(
         path: out_dir.display().to_string(),
         source,
     })?;
-    let (writer, done, dropped) = parts::PartWriter::open(&part_path, &header, opts.fresh)?;
+    let (writer, done, dropped) = parts::PartWriter::open(&part_path, &header, existing)?;
     let todo: Vec<usize> = (0..total)
         .filter(|r| r % n == k && !done.contains_key(r))
         .collect();

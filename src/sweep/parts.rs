@@ -11,25 +11,6 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// A stable 64-bit FNV-1a hash of byte strings (each prefixed by its length), as hex: the
-/// identity of a sweep (case file, mesh file, sweep file, program version).
-pub fn sweep_id(parts: &[&[u8]]) -> String {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    let mut eat = |b: u8| {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    };
-    for p in parts {
-        for b in (p.len() as u64).to_le_bytes() {
-            eat(b);
-        }
-        for &b in *p {
-            eat(b);
-        }
-    }
-    format!("{h:016x}")
-}
-
 /// The file name of shard `k` of `n`.
 pub fn part_name(k: usize, n: usize) -> String {
     format!("part_{k}_of_{n}.jsonl")
@@ -90,31 +71,34 @@ pub struct PartWriter {
 }
 
 impl PartWriter {
-    /// Opens (or creates) the part `path` of the sweep described by `header`; returns the
-    /// writer, the rows already there and how many bytes of a row cut short were dropped.
-    /// A part of another sweep (different `sweep_id`) is refused unless `fresh`, which
-    /// starts it anew.
+    /// The part at `path` to resume, if there is one: `None` when it does not exist or
+    /// `fresh` discards it; a part of another sweep (different `sweep_id`) is refused.
+    pub fn existing(path: &Path, header: &Value, fresh: bool) -> Result<Option<Part>, SweepError> {
+        if !path.exists() || fresh {
+            return Ok(None);
+        }
+        let part = read_part(path)?;
+        if part.header["sweep_id"] != header["sweep_id"] {
+            return Err(SweepError::ForeignPart {
+                path: path.display().to_string(),
+                found: part.header["sweep_id"].as_str().unwrap_or("?").to_string(),
+                expected: header["sweep_id"].as_str().unwrap_or("?").to_string(),
+            });
+        }
+        Ok(Some(part))
+    }
+
+    /// Opens the part `path` of the sweep described by `header` for appending: goes on from
+    /// `existing` ([`Self::existing`]) or creates it. Returns the writer, the rows already
+    /// there and how many bytes of a row cut short were dropped.
     pub fn open(
         path: &Path,
         header: &Value,
-        fresh: bool,
+        existing: Option<Part>,
     ) -> Result<(Self, BTreeMap<usize, Value>, usize), SweepError> {
         let write_err = |source| SweepError::Write {
             path: path.display().to_string(),
             source,
-        };
-        let existing = if path.exists() && !fresh {
-            let part = read_part(path)?;
-            if part.header["sweep_id"] != header["sweep_id"] {
-                return Err(SweepError::ForeignPart {
-                    path: path.display().to_string(),
-                    found: part.header["sweep_id"].as_str().unwrap_or("?").to_string(),
-                    expected: header["sweep_id"].as_str().unwrap_or("?").to_string(),
-                });
-            }
-            Some(part)
-        } else {
-            None
         };
         let (rows, dropped) = match existing {
             Some(part) => {
