@@ -19,14 +19,76 @@
 //! every equation (it appears as the force `k_g u` the spring would carry).
 
 use crate::assembly::UpperCsc;
-use crate::linsolve::{FactorError, PartialCholesky, PartialSymbolic};
+use crate::linsolve::{
+    FactorError, PartialCholesky, PartialSymbolic, SaddleFactor, SaddleSymbolic,
+};
+
+/// The factorisation behind a [`Condensed`] system.
+pub enum Factor {
+    /// `K̂` with the retained DOFs last and the dense `L_RR` (models without contact: the
+    /// retained DOFs are the pilot's).
+    Partial(PartialCholesky),
+    /// The saddle-point matrix `[K̂ Yᵀ; Y 0]` of a contact model (see [`SaddleSymbolic`]):
+    /// `K̂` solves from its leading block, the Delassus operator from its trailing block.
+    Saddle(SaddleFactor),
+}
+
+impl Factor {
+    /// Solves `K̂ x = b` in place.
+    pub fn solve_in_place(&self, b: &mut [f64]) {
+        match self {
+            Factor::Partial(c) => c.solve_in_place(b),
+            Factor::Saddle(s) => s.solve_in_place(b),
+        }
+    }
+
+    /// Solves `K̂ X = B` in place for a column-major block of `ncols` right-hand sides.
+    pub fn solve_block_in_place(&self, b: &mut [f64], ncols: usize) {
+        match self {
+            Factor::Partial(c) => c.solve_block_in_place(b, ncols),
+            Factor::Saddle(s) => s.solve_block_in_place(b, ncols),
+        }
+    }
+
+    /// `L_RR` of a partial factorisation.
+    fn l_rr(&self) -> faer::MatRef<'_, f64> {
+        match self {
+            Factor::Partial(c) => c.l_rr(),
+            Factor::Saddle(_) => {
+                panic!("the dense condensed stiffness is formed only for models without contact")
+            }
+        }
+    }
+}
+
+/// The values of `K̂ = K + k_g E Eᵀ` (springs on the `grounded` retained DOFs), the springs
+/// (retained index, `k_g`) and the largest diagonal entry of `K_RR`.
+fn grounded_values(
+    k: &UpperCsc,
+    n_i: usize,
+    grounded: &[usize],
+) -> (Vec<f64>, Vec<(usize, f64)>, f64) {
+    let mut values = k.values.clone();
+    let diag = |c: usize| k.position(c, c);
+    let krr_scale = (n_i..k.n)
+        .map(|c| k.values[diag(c)].abs())
+        .fold(0.0, f64::max);
+    let mut grounding = Vec::new();
+    for &r in grounded {
+        let p = diag(n_i + r);
+        let kg = k.values[p].abs().max(f64::MIN_POSITIVE);
+        values[p] += kg;
+        grounding.push((r, kg));
+    }
+    (values, grounding, krr_scale)
+}
 
 /// The condensed system on the retained DOFs.
 pub struct Condensed {
     pub n_i: usize,
     pub n_r: usize,
-    /// Factorisation of `K̂` with the retained DOFs last.
-    pub chol: PartialCholesky,
+    /// Factorisation of `K̂`.
+    pub chol: Factor,
     /// Grounding springs: (retained index, stiffness `k_g`).
     pub grounding: Vec<(usize, f64)>,
     /// Largest diagonal entry of `K_RR` before condensation: the scale against which a
@@ -43,23 +105,32 @@ impl Condensed {
         grounded: &[usize],
         symbolic: &PartialSymbolic,
     ) -> Result<Condensed, FactorError> {
-        let n_r = k.n - n_i;
-        let mut values = k.values.clone();
-        let diag = |c: usize| k.position(c, c);
-        let krr_scale = (n_i..k.n)
-            .map(|c| k.values[diag(c)].abs())
-            .fold(0.0, f64::max);
-        let mut grounding = Vec::new();
-        for &r in grounded {
-            let p = diag(n_i + r);
-            let kg = k.values[p].abs().max(f64::MIN_POSITIVE);
-            values[p] += kg;
-            grounding.push((r, kg));
-        }
-        let chol = symbolic.factorise(&k.col_ptr, &k.row_idx, &values)?;
+        let (values, grounding, krr_scale) = grounded_values(k, n_i, grounded);
+        let chol = Factor::Partial(symbolic.factorise(&k.col_ptr, &k.row_idx, &values)?);
         Ok(Condensed {
             n_i,
-            n_r,
+            n_r: k.n - n_i,
+            chol,
+            grounding,
+            krr_scale,
+        })
+    }
+
+    /// As [`Condensed::build`] for a contact model: factorises the saddle-point matrix
+    /// `[K̂ Yᵀ; Y 0]` with the constraint rows `y_rows` (free-DOF index, coefficient), which
+    /// must end with one unit row per grounded DOF, as analysed by `symbolic`.
+    pub fn build_saddle(
+        k: &UpperCsc,
+        n_i: usize,
+        grounded: &[usize],
+        y_rows: &[Vec<(usize, f64)>],
+        symbolic: &SaddleSymbolic,
+    ) -> Result<Condensed, FactorError> {
+        let (values, grounding, krr_scale) = grounded_values(k, n_i, grounded);
+        let chol = Factor::Saddle(symbolic.factorise(&values, y_rows)?);
+        Ok(Condensed {
+            n_i,
+            n_r: k.n - n_i,
             chol,
             grounding,
             krr_scale,

@@ -224,3 +224,422 @@ impl PartialCholesky {
         self.solve_block_in_place(b, 1);
     }
 }
+
+/// The sparsity pattern and symbolic analysis of the saddle-point matrix of a contact model,
+/// ```text
+///   A = [K̂  Yᵀ]     (n + m) × (n + m),
+///       [Y   0 ]
+/// ```
+/// with the `m` constraint rows `Y` (mortar gap and slip rows, anchors) ordered after the `n`
+/// free DOFs. Eliminating the free DOFs leaves `−W = −Y K̂⁻¹ Yᵀ` in the trailing block, so an
+/// `L D Lᵀ` factorisation without pivoting (A is quasi-definite in this order: `K̂` positive
+/// definite, `W` positive definite when `Y` has full row rank) gives both the factor of `K̂`
+/// (its leading block) and the Delassus operator `W = −L_MM D_MM L_MMᵀ`, with a dense block of
+/// order `m` only — instead of the dense Schur complement on every contact DOF (about `2m`)
+/// followed by `m` triangular solves with it.
+#[derive(Clone)]
+pub struct SaddleSymbolic {
+    inner: std::sync::Arc<faer::sparse::linalg::cholesky::SymbolicCholesky<usize>>,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    n: usize,
+    m: usize,
+}
+
+/// A numeric `L D Lᵀ` factorisation of a saddle-point matrix (see [`SaddleSymbolic`]).
+pub struct SaddleFactor {
+    symbolic: std::sync::Arc<faer::sparse::linalg::cholesky::SymbolicCholesky<usize>>,
+    values: Vec<f64>,
+    n: usize,
+    m: usize,
+}
+
+/// The supernodal structure of a symbolic factorisation (forced supernodal at analysis).
+fn supernodal(
+    s: &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
+) -> Result<
+    &faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<usize>,
+    FactorError,
+> {
+    match s.raw() {
+        faer::sparse::linalg::cholesky::SymbolicCholeskyRaw::Supernodal(sn) => Ok(sn),
+        _ => Err(FactorError::NotSupernodal),
+    }
+}
+
+/// A fill-reducing ordering of the leading `n_lead` columns of an upper CSC pattern (which
+/// are themselves a valid upper CSC pattern): `fwd[new] = old`.
+fn order_leading(
+    n_lead: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+    n: usize,
+) -> Result<Vec<usize>, FactorError> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::sparse::linalg::amd;
+    let mut fwd = vec![0usize; n_lead];
+    let mut inv = vec![0usize; n_lead];
+    if n_lead == 0 {
+        return Ok(fwd);
+    }
+    let a = sym(n_lead, col_ptr, row_idx);
+    let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(
+        n_lead,
+        col_ptr[n_lead],
+    ))
+    .map_err(|_| FactorError::OutOfMemory {
+        what: "the ordering",
+        n,
+    })?;
+    amd::order_maybe_unsorted(
+        &mut fwd,
+        &mut inv,
+        a,
+        Default::default(),
+        MemStack::new(&mut mem),
+    )
+    .map_err(|e| match e {
+        faer::sparse::FaerError::IndexOverflow => FactorError::IndexOverflow { n },
+        _ => FactorError::OutOfMemory {
+            what: "the ordering",
+            n,
+        },
+    })?;
+    Ok(fwd)
+}
+
+impl SaddleSymbolic {
+    /// The pattern of `A` from the upper CSC pattern of `K̂` (order `n`) and the rows of `Y`
+    /// (free-DOF index, coefficient), and its symbolic analysis: the free DOFs ordered by a
+    /// fill-reducing ordering, the constraint rows last in their own order.
+    pub fn analyse(
+        n: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        y_rows: &[Vec<(usize, f64)>],
+    ) -> Result<SaddleSymbolic, FactorError> {
+        use faer::sparse::linalg::{SupernodalThreshold, cholesky};
+        let m = y_rows.len();
+        let size = n + m;
+        let mut cp = col_ptr[..=n].to_vec();
+        let mut ri = row_idx[..col_ptr[n]].to_vec();
+        for row in y_rows {
+            let mut rows: Vec<usize> = row.iter().map(|&(r, _)| r).collect();
+            rows.sort_unstable();
+            rows.dedup();
+            ri.extend(rows);
+            ri.push(cp.len() - 1); // the (zero) diagonal of the constraint column
+            cp.push(ri.len());
+        }
+        let mut fwd = order_leading(n, col_ptr, row_idx, size)?;
+        fwd.extend(n..size);
+        let mut inv = vec![0usize; size];
+        for (new, &old) in fwd.iter().enumerate() {
+            inv[old] = new;
+        }
+        let perm = faer::perm::PermRef::new_checked(&fwd, &inv, size);
+        let params = cholesky::CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        let inner = cholesky::factorize_symbolic_cholesky(
+            sym(size, &cp, &ri),
+            Side::Upper,
+            cholesky::SymmetricOrdering::Custom(perm),
+            params,
+        )
+        .map_err(|e| match e {
+            faer::sparse::FaerError::IndexOverflow => FactorError::IndexOverflow { n: size },
+            _ => FactorError::OutOfMemory {
+                what: "the symbolic analysis",
+                n: size,
+            },
+        })?;
+        supernodal(&inner)?;
+        Ok(SaddleSymbolic {
+            inner: std::sync::Arc::new(inner),
+            col_ptr: cp,
+            row_idx: ri,
+            n,
+            m,
+        })
+    }
+
+    /// Number of nonzeros of the factor `L` (supernodal storage).
+    pub fn factor_len(&self) -> usize {
+        self.inner.len_val()
+    }
+
+    /// Estimated floating-point operations of the numeric factorisation, split into the
+    /// elimination of `K̂` itself, its updates of the constraint rows (the fill that couples
+    /// `Y` to the separators) and the dense constraint block: `(k, k_to_m, m)`.
+    pub fn flops(&self) -> (f64, f64, f64) {
+        let sn = supernodal(&self.inner).expect("analysed supernodal");
+        let n = self.n;
+        let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
+        let ptr = sn.col_ptr_for_row_idx();
+        let (mut fk, mut fkm, mut fm) = (0.0, 0.0, 0.0);
+        for s in 0..sn.n_supernodes() {
+            let pattern = &sn.row_idx()[ptr[s]..ptr[s + 1]];
+            let w = (end[s] - begin[s]) as f64;
+            let wk = (end[s].min(n).saturating_sub(begin[s])) as f64;
+            let wm = w - wk;
+            let pk = pattern.iter().filter(|&&r| r < n).count() as f64;
+            let pm = pattern.len() as f64 - pk;
+            // Columns of K̂: their own block and updates of K̂ rows, then of constraint rows.
+            fk += wk * wk * wk / 3.0 + wk * wk * pk + wk * pk * pk;
+            fkm += wk * wk * (pm + wm) + wk * (pm + wm) * (pm + wm + 2.0 * pk);
+            // Constraint columns (all after K̂'s).
+            fm += wm * wm * wm / 3.0 + wm * wm * pm + wm * pm * pm;
+        }
+        (fk, fkm, fm)
+    }
+
+    /// Numeric `L D Lᵀ` factorisation with the values of `K̂` (in the pattern given to
+    /// [`Self::analyse`]) and the same `Y` rows.
+    pub fn factorise(
+        &self,
+        k_values: &[f64],
+        y_rows: &[Vec<(usize, f64)>],
+    ) -> Result<SaddleFactor, FactorError> {
+        use faer::dyn_stack::{MemBuffer, MemStack};
+        let (n, m) = (self.n, self.m);
+        let size = n + m;
+        let mut values = Vec::with_capacity(self.row_idx.len());
+        values.extend_from_slice(&k_values[..self.col_ptr[n]]);
+        for (i, row) in y_rows.iter().enumerate() {
+            let rows = &self.row_idx[self.col_ptr[n + i]..self.col_ptr[n + i + 1]];
+            let start = values.len();
+            values.resize(start + rows.len(), 0.0);
+            for &(r, v) in row {
+                let p = rows[..rows.len() - 1]
+                    .binary_search(&r)
+                    .expect("row in the analysed pattern");
+                values[start + p] += v;
+            }
+        }
+        let a = SparseColMatRef::new(sym(size, &self.col_ptr, &self.row_idx), &values);
+        let par = faer::get_global_parallelism();
+        let mut l = vec![0.0; self.inner.len_val()];
+        let mut mem = MemBuffer::try_new(
+            self.inner
+                .factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
+        )
+        .map_err(|_| FactorError::OutOfMemory {
+            what: "the numeric factorisation",
+            n: size,
+        })?;
+        self.inner
+            .factorize_numeric_ldlt(
+                &mut l,
+                a,
+                Side::Upper,
+                Default::default(),
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .map_err(|e| match e {
+                faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } => {
+                    FactorError::NotPositiveDefinite { pivot: index, n }
+                }
+            })?;
+        let f = SaddleFactor {
+            symbolic: self.inner.clone(),
+            values: l,
+            n,
+            m,
+        };
+        // K̂ must be positive definite: every pivot of its block positive (a body that nothing
+        // holds gives a vanishing or negative one).
+        let sn = supernodal(&f.symbolic)?;
+        let lref = SupernodalLltRef::new(sn, &f.values);
+        let mut dmax: f64 = 0.0;
+        for s in 0..sn.n_supernodes() {
+            let node = lref.supernode(s);
+            let v = node.val();
+            for j in 0..v.ncols() {
+                let col = node.start() + j;
+                if col >= n {
+                    break;
+                }
+                let d = v[(j, j)];
+                dmax = dmax.max(d.abs());
+                if !(d > 1e-14 * dmax) {
+                    return Err(FactorError::NotPositiveDefinite { pivot: col, n });
+                }
+            }
+        }
+        Ok(f)
+    }
+}
+
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
+
+impl SaddleFactor {
+    /// Order of `K̂`.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Solves `K̂ X = B` in place for a column-major block of `ncols` right-hand sides: the
+    /// sweeps of the leading block of the factor only.
+    pub fn solve_block_in_place(&self, b: &mut [f64], ncols: usize) {
+        let (n, m) = (self.n, self.m);
+        let size = n + m;
+        let sn = supernodal(&self.symbolic).expect("analysed supernodal");
+        let perm = self.symbolic.perm().expect("custom ordering");
+        let (fwd, inv) = perm.arrays();
+        // Permuted copy, constraint rows zero (they are never read below).
+        let mut x = vec![0.0; size * ncols];
+        for j in 0..ncols {
+            for i in 0..n {
+                x[j * size + i] = b[j * n + fwd[i]];
+            }
+        }
+        // The supernodal factor is stored like an L Lᵀ one with D on the diagonal of unit-lower
+        // diagonal blocks; read it through the same accessor.
+        let lref = SupernodalLltRef::new(sn, &self.values);
+        let nsup = sn.n_supernodes();
+        for j in 0..ncols {
+            let x = &mut x[j * size..(j + 1) * size];
+            // Forward: L_KK y = b.
+            for s in 0..nsup {
+                let node = lref.supernode(s);
+                let (start, v, pat) = (node.start(), node.val(), node.pattern());
+                let w = v.ncols();
+                if start >= n {
+                    break;
+                }
+                for c in 0..w {
+                    let col = start + c;
+                    if col >= n {
+                        break;
+                    }
+                    let xc = x[col];
+                    if xc == 0.0 {
+                        continue;
+                    }
+                    for r in c + 1..w {
+                        x[start + r] -= v[(r, c)] * xc;
+                    }
+                    for (k, &row) in pat.iter().enumerate() {
+                        if row < n {
+                            x[row] -= v[(w + k, c)] * xc;
+                        }
+                    }
+                }
+            }
+            // D.
+            for s in 0..nsup {
+                let node = lref.supernode(s);
+                let (start, v) = (node.start(), node.val());
+                for c in 0..v.ncols() {
+                    if start + c < n {
+                        x[start + c] /= v[(c, c)];
+                    }
+                }
+            }
+            // Backward: L_KKᵀ x = y.
+            for s in (0..nsup).rev() {
+                let node = lref.supernode(s);
+                let (start, v, pat) = (node.start(), node.val(), node.pattern());
+                let w = v.ncols();
+                if start >= n {
+                    continue;
+                }
+                for c in (0..w).rev() {
+                    let col = start + c;
+                    if col >= n {
+                        continue;
+                    }
+                    let mut acc = x[col];
+                    for r in c + 1..w {
+                        if start + r < n {
+                            acc -= v[(r, c)] * x[start + r];
+                        }
+                    }
+                    for (k, &row) in pat.iter().enumerate() {
+                        if row < n {
+                            acc -= v[(w + k, c)] * x[row];
+                        }
+                    }
+                    x[col] = acc;
+                }
+            }
+        }
+        for j in 0..ncols {
+            for i in 0..n {
+                b[j * n + i] = x[j * size + inv[i]];
+            }
+        }
+    }
+
+    /// Solves `K̂ x = b` in place.
+    pub fn solve_in_place(&self, b: &mut [f64]) {
+        self.solve_block_in_place(b, 1);
+    }
+
+    /// The Delassus operator `W = Y K̂⁻¹ Yᵀ = −L_MM D_MM L_MMᵀ` (dense, `m × m`), or `None`
+    /// when a pivot of the constraint block is not negative (`Y` is rank-deficient, or `W` is
+    /// too ill-conditioned for the unpivoted factorisation to be trusted).
+    pub fn delassus(&self) -> Option<faer::Mat<f64>> {
+        use faer::linalg::matmul::triangular::{BlockStructure, matmul};
+        let (n, m) = (self.n, self.m);
+        let sn = supernodal(&self.symbolic).expect("analysed supernodal");
+        let lref = SupernodalLltRef::new(sn, &self.values);
+        // L_MM with D_MM on its diagonal.
+        let mut l = faer::Mat::<f64>::zeros(m, m);
+        for s in 0..sn.n_supernodes() {
+            let node = lref.supernode(s);
+            let (start, val, pattern) = (node.start(), node.val(), node.pattern());
+            let ncols = val.ncols();
+            if start + ncols <= n {
+                continue;
+            }
+            for j in 0..ncols {
+                let col = start + j;
+                if col < n {
+                    continue;
+                }
+                for i in j..ncols {
+                    l[(start + i - n, col - n)] = val[(i, j)];
+                }
+                for (k, &row) in pattern.iter().enumerate() {
+                    l[(row - n, col - n)] = val[(ncols + k, j)];
+                }
+            }
+        }
+        let dmax = (0..m).map(|i| l[(i, i)].abs()).fold(0.0, f64::max);
+        if (0..m).any(|i| !(l[(i, i)] < -1e-13 * dmax)) {
+            return None;
+        }
+        // B = L D (lower), W = −B Lᵀ, lower half, then mirrored.
+        let mut b = l.clone();
+        for j in 0..m {
+            let d = l[(j, j)];
+            b[(j, j)] = d;
+            for i in j + 1..m {
+                b[(i, j)] *= d;
+            }
+        }
+        let mut w = faer::Mat::<f64>::zeros(m, m);
+        matmul(
+            w.as_mut(),
+            BlockStructure::TriangularLower,
+            faer::Accum::Replace,
+            b.as_ref(),
+            BlockStructure::TriangularLower,
+            l.transpose(),
+            BlockStructure::UnitTriangularUpper,
+            -1.0,
+            faer::get_global_parallelism(),
+        );
+        for j in 0..m {
+            for i in j + 1..m {
+                w[(j, i)] = w[(i, j)];
+            }
+        }
+        Some(w)
+    }
+}

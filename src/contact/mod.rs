@@ -22,25 +22,26 @@ pub struct ContactModel {
     pub e_star: f64,
 }
 
-impl ContactModel {
-    /// Expresses the pair's mortar operator in the retained DOFs of `dofs` and builds the
-    /// Delassus operator from the condensed stiffness.
-    pub fn new(
-        pair: Pair,
-        dofs: &crate::dofs::DofMap,
-        cond: &crate::condense::Condensed,
-        e_star: f64,
-    ) -> ContactModel {
+/// The constraint rows `Y` of a pair over the retained DOFs (retained index, coefficient), in
+/// the order of μ: gap rows, slip rows, then one unit row per grounded retained DOF; with the
+/// nodal initial gaps and tangential offsets that prescribed displacements add.
+pub struct ConstraintRows {
+    pub rows: Vec<Vec<(usize, f64)>>,
+    pub gap0: Vec<f64>,
+    pub v0: Vec<f64>,
+}
+
+impl ConstraintRows {
+    /// Expresses the pair's mortar operator in the retained DOFs of `dofs`; `grounded` are the
+    /// retained indices of the anchors (the pilot's first).
+    pub fn new(pair: &Pair, dofs: &crate::dofs::DofMap, grounded: &[usize]) -> ConstraintRows {
         use crate::dofs::Dof;
         let m0 = &pair.mortar;
         let ns = m0.slave_nodes.len();
         let n_i = dofs.n_interior;
-        let n_r = dofs.n_retained;
-        let has_pilot = dofs.pilot.is_some();
-        let m = 2 * ns + cond.grounding.len();
         let mut gap0 = m0.gap0.clone();
         let mut v0 = vec![0.0; ns];
-        let mut y_rows = Vec::with_capacity(m);
+        let mut rows = Vec::with_capacity(2 * ns + grounded.len());
         let to_r = |row: &mortar::Row, constant: &mut f64| -> Vec<(usize, f64)> {
             let mut out = Vec::new();
             for (node, coef) in row {
@@ -55,39 +56,45 @@ impl ContactModel {
             out
         };
         for j in 0..ns {
-            let r = to_r(&m0.g_rows[j], &mut gap0[j]);
-            y_rows.push(r);
+            rows.push(to_r(&m0.g_rows[j], &mut gap0[j]));
         }
         for j in 0..ns {
-            let r = to_r(&m0.t_rows[j], &mut v0[j]);
-            y_rows.push(r);
+            rows.push(to_r(&m0.t_rows[j], &mut v0[j]));
         }
-        // Anchors: every grounded retained DOF (the pilot's first).
-        for &(r, _) in &cond.grounding {
-            y_rows.push(vec![(r, 1.0)]);
+        for &r in grounded {
+            rows.push(vec![(r, 1.0)]);
         }
-        // Z = L_RR⁻¹ Yᵀ, W = Zᵀ Z.
-        let mut z = faer::Mat::<f64>::zeros(n_r, m);
-        for (col, row) in y_rows.iter().enumerate() {
-            for &(r, v) in row {
-                z[(r, col)] += v;
-            }
+        ConstraintRows { rows, gap0, v0 }
+    }
+
+    /// The rows in free-DOF indices (retained index + `n_i`).
+    pub fn free(&self, n_i: usize) -> Vec<Vec<(usize, f64)>> {
+        self.rows
+            .iter()
+            .map(|r| r.iter().map(|&(k, v)| (n_i + k, v)).collect())
+            .collect()
+    }
+}
+
+impl ContactModel {
+    /// The contact model of `pair` on the condensed system `cond`, whose grounding springs are
+    /// the last rows of `y`: the Delassus operator `W = Y K̂⁻¹ Yᵀ` from the trailing block of
+    /// the saddle-point factorisation, or (when that block is not negative definite to
+    /// working precision, a rank-deficient `Y`) by one solve per row.
+    pub fn new(
+        pair: Pair,
+        y: ConstraintRows,
+        has_pilot: bool,
+        cond: &crate::condense::Condensed,
+        e_star: f64,
+    ) -> ContactModel {
+        let m0 = &pair.mortar;
+        let ns = m0.slave_nodes.len();
+        let w = match &cond.chol {
+            crate::condense::Factor::Saddle(f) => f.delassus(),
+            crate::condense::Factor::Partial(_) => None,
         }
-        let par = faer::get_global_parallelism();
-        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-            cond.chol.l_rr(),
-            z.as_mut(),
-            par,
-        );
-        let mut w = faer::Mat::<f64>::zeros(m, m);
-        faer::linalg::matmul::matmul(
-            w.as_mut(),
-            faer::Accum::Replace,
-            z.transpose(),
-            z.as_ref(),
-            1.0,
-            par,
-        );
+        .unwrap_or_else(|| delassus_by_solves(&y.rows, cond));
         let kg: Vec<f64> = cond.grounding.iter().map(|g| g.1).collect();
         let eps_unit = (0..ns).map(|j| e_star * m0.weight[j] / m0.h[j]).collect();
         // Orientation of the mean slip: its response to a pilot force in +x.
@@ -101,9 +108,8 @@ impl ContactModel {
             ns,
             has_pilot,
             w,
-            z,
-            gap0,
-            v0,
+            gap0: y.gap0,
+            v0: y.v0,
             c: e_star,
             eps_unit,
             kg,
@@ -114,35 +120,19 @@ impl ContactModel {
         ContactModel {
             pair,
             system,
-            y_rows,
+            y_rows: y.rows,
             e_star,
         }
     }
 
-    /// `w0 = Zᵀ L_RR⁻¹ g` for a condensed load `g`.
-    pub fn w0(&self, cond: &crate::condense::Condensed, g: &[f64]) -> Vec<f64> {
-        let n_r = g.len();
-        let mut x = faer::Mat::<f64>::zeros(n_r, 1);
-        for i in 0..n_r {
-            x[(i, 0)] = g[i];
-        }
-        let par = faer::get_global_parallelism();
-        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-            cond.chol.l_rr(),
-            x.as_mut(),
-            par,
-        );
-        let m = self.system.z.ncols();
-        let mut out = faer::Mat::<f64>::zeros(m, 1);
-        faer::linalg::matmul::matmul(
-            out.as_mut(),
-            faer::Accum::Replace,
-            self.system.z.transpose(),
-            x.as_ref(),
-            1.0,
-            par,
-        );
-        (0..m).map(|i| out[(i, 0)]).collect()
+    /// `w0 = Y K̂⁻¹ f` for a free load vector `f`.
+    pub fn w0(&self, cond: &crate::condense::Condensed, f: &[f64]) -> Vec<f64> {
+        let mut x = f.to_vec();
+        cond.chol.solve_in_place(&mut x);
+        self.y_rows
+            .iter()
+            .map(|row| row.iter().map(|&(r, v)| v * x[cond.n_i + r]).sum())
+            .collect()
     }
 
     /// The forces on the retained DOFs, `r = Yᵀ μ`, of a contact state.
@@ -165,4 +155,35 @@ impl ContactModel {
         }
         r
     }
+}
+
+/// `W = Y K̂⁻¹ Yᵀ` by one solve with `K̂` per row of `Y` (a block solve).
+fn delassus_by_solves(
+    rows: &[Vec<(usize, f64)>],
+    cond: &crate::condense::Condensed,
+) -> faer::Mat<f64> {
+    let n = cond.n_i + cond.n_r;
+    let m = rows.len();
+    let mut x = vec![0.0; n * m];
+    for (j, row) in rows.iter().enumerate() {
+        for &(r, v) in row {
+            x[j * n + cond.n_i + r] += v;
+        }
+    }
+    cond.chol.solve_block_in_place(&mut x, m);
+    let mut w = faer::Mat::<f64>::zeros(m, m);
+    for (i, row) in rows.iter().enumerate() {
+        for j in 0..m {
+            w[(i, j)] = row.iter().map(|&(r, v)| v * x[j * n + cond.n_i + r]).sum();
+        }
+    }
+    // Symmetric to round-off; make it exactly so.
+    for i in 0..m {
+        for j in 0..i {
+            let a = 0.5 * (w[(i, j)] + w[(j, i)]);
+            w[(i, j)] = a;
+            w[(j, i)] = a;
+        }
+    }
+    w
 }

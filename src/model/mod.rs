@@ -9,7 +9,7 @@ use crate::case::{Case, TractionKind};
 use crate::condense::Condensed;
 use crate::dofs::{DofMap, SupportSpec};
 use crate::elasticity::{self, Material};
-use crate::linsolve::PartialSymbolic;
+use crate::linsolve::{PartialSymbolic, SaddleSymbolic};
 use crate::loads::{EdgeOrientation, Traction};
 use crate::mesh::{Mesh, check};
 use std::time::Instant;
@@ -155,11 +155,6 @@ impl Model {
         let f_traction = traction_forces(case, &mesh, &orient, &dofs);
         timings.assemble = t.elapsed().as_secs_f64();
 
-        let t = Instant::now();
-        let symbolic =
-            PartialSymbolic::analyse(dofs.n_free(), dofs.n_retained, &k.col_ptr, &k.row_idx)?;
-        timings.analyse = t.elapsed().as_secs_f64();
-        let t = Instant::now();
         // The pilot's DOFs are grounded: the body it drives may be held by nothing else.
         let mut grounded: Vec<usize> = dofs
             .pilot
@@ -175,15 +170,12 @@ impl Model {
                 &retained,
             ));
         }
-        let condensed = Condensed::build(&k, dofs.n_interior, &grounded, &symbolic)?;
-        timings.factorise = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let contact = pair.map(|p| {
-            let mut c =
-                crate::contact::ContactModel::new(p, &dofs, &condensed, e_star.expect("with pair"));
+        let (condensed, contact) = factorise(&k, &dofs, &grounded, pair, e_star, timings)?;
+        let contact = contact.map(|mut c| {
             c.system.floating_pilot = pilot_separation.is_some();
             c
         });
+        let t = Instant::now();
         let friction = match (&case.contact, e_star) {
             (Some(cs), Some(es)) => cs
                 .friction
@@ -195,12 +187,12 @@ impl Model {
         };
         let contact_w0 = match &contact {
             Some(c) => [
-                c.w0(&condensed, &condensed.reduce(&f_traction)),
-                c.w0(&condensed, &condensed.reduce(&f_prescribed)),
+                c.w0(&condensed, &f_traction),
+                c.w0(&condensed, &f_prescribed),
             ],
             None => [Vec::new(), Vec::new()],
         };
-        timings.condense = t.elapsed().as_secs_f64();
+        timings.condense += t.elapsed().as_secs_f64();
         Ok(Model {
             mesh,
             elems,
@@ -251,6 +243,50 @@ impl Model {
         }
         acc
     }
+}
+
+/// Analyses and factorises the stiffness `k` with springs on the `grounded` retained DOFs, and
+/// builds the contact model of `pair` on it: without contact, a partial factorisation with the
+/// retained (pilot) DOFs last; with contact, the saddle-point matrix with the contact
+/// constraint rows, whose trailing block gives the Delassus operator. Records the `analyse`,
+/// `factorise` and `condense` (the Delassus operator) timings.
+fn factorise(
+    k: &UpperCsc,
+    dofs: &DofMap,
+    grounded: &[usize],
+    pair: Option<crate::contact::Pair>,
+    e_star: Option<f64>,
+    timings: &mut Timings,
+) -> Result<(Condensed, Option<crate::contact::ContactModel>), ModelError> {
+    let n_i = dofs.n_interior;
+    let Some(pair) = pair else {
+        let t = Instant::now();
+        let symbolic =
+            PartialSymbolic::analyse(dofs.n_free(), dofs.n_retained, &k.col_ptr, &k.row_idx)?;
+        timings.analyse = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let condensed = Condensed::build(k, n_i, grounded, &symbolic)?;
+        timings.factorise = t.elapsed().as_secs_f64();
+        return Ok((condensed, None));
+    };
+    let y = crate::contact::ConstraintRows::new(&pair, dofs, grounded);
+    let y_free = y.free(n_i);
+    let t = Instant::now();
+    let symbolic = SaddleSymbolic::analyse(dofs.n_free(), &k.col_ptr, &k.row_idx, &y_free)?;
+    timings.analyse = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let condensed = Condensed::build_saddle(k, n_i, grounded, &y_free, &symbolic)?;
+    timings.factorise = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let contact = crate::contact::ContactModel::new(
+        pair,
+        y,
+        dofs.pilot.is_some(),
+        &condensed,
+        e_star.expect("with pair"),
+    );
+    timings.condense = t.elapsed().as_secs_f64();
+    Ok((condensed, Some(contact)))
 }
 
 /// The curve groups the case names: supports, tractions, the pilot, then the contact pair

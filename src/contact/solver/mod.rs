@@ -6,11 +6,12 @@
 //! nodal tangential forces on the master side, and the pilot's force plus its grounding spring
 //! force `z = r_P + k_g u_P`. Then
 //! ```text
-//!   Y u_R = w0 + W μ,   W = Y Ŝ⁻¹ Yᵀ = Zᵀ Z,   Z = L_RR⁻¹ Yᵀ,   w0 = Zᵀ L_RR⁻¹ g,
+//!   Y u_R = w0 + W μ,   W = Y Ŝ⁻¹ Yᵀ = Y K̂⁻¹ Yᵀ,   w0 = Y K̂⁻¹ f,
 //! ```
 //! gives every nodal gap `ĝ = g0 + (Y u_R)_n`, relative tangential displacement
 //! `v̂ = (Y u_R)_t` and the pilot displacement from `μ` alone. `W` (the Delassus operator) is
-//! dense and small and is built once per model; each Newton iteration is a dense solve on the
+//! dense and small and is built once per model, from the trailing block of the factorised
+//! saddle-point matrix `[K̂ Yᵀ; Y 0]` ([`crate::linsolve::SaddleSymbolic`]); each Newton iteration is a dense solve on the
 //! active unknowns.
 //!
 //! Complementarity at each slave node j (forces, gaps and slips are nodal quantities):
@@ -145,8 +146,6 @@ pub struct ContactSystem {
     pub has_pilot: bool,
     /// Delassus operator `W` (m × m), m = 2 ns (+ 2 with a pilot).
     pub w: Mat<f64>,
-    /// `Z = L_RR⁻¹ Yᵀ` (n_R × m).
-    pub z: Mat<f64>,
     /// Nodal initial gaps (including the effect of prescribed displacements).
     pub gap0: Vec<f64>,
     /// Constant tangential offsets from prescribed displacements.
