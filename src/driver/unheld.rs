@@ -7,11 +7,21 @@ use crate::error::StepError;
 use crate::model::Model;
 
 /// The pilot's drive along the direction that separates its (otherwise unheld) body from the
-/// contact: the dominant component of that direction, and its force if force-controlled.
+/// contact: the dominant component of that direction, and its force if force-controlled. A
+/// force at the round-off of zero (below 1e-12 of the largest modulus times the model's
+/// diameter: e.g. a stage that holds the force a zero load converged to) counts as zero, whose
+/// sign means nothing.
 fn separating_force(model: &Model, ctl: &[Control; 2]) -> Option<(usize, usize, Option<f64>)> {
     let (body, sep) = model.pilot_separation?;
     let k = if sep[0].abs() > sep[1].abs() { 0 } else { 1 };
+    let e_max = model
+        .elems
+        .iter()
+        .map(|(_, m)| m.e.abs())
+        .fold(0.0, f64::max);
+    let round_off = 1e-12 * e_max * model.mesh.diameter();
     let f = match ctl[k] {
+        Control::Force(f) if f.abs() <= round_off => Some(0.0),
         Control::Force(f) => Some(f * sep[k].signum()),
         Control::Displacement(_) | Control::Slip(_) => None,
     };

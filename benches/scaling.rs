@@ -1,0 +1,306 @@
+//! Scaling benchmark (the "speed at scale" issue): the phases of the paper's Fig. 2 run against
+//! the number of DOFs over the VM272 ladder, with fitted exponents and the issue's ratios.
+//!
+//! The case is `cases/fig2.json` as shipped (normal load, 40 tangential steps, VTU every 10th
+//! step) with its mesh replaced by `meshes/vm272_L{k}.msh`. L6 and L7 are not committed: they
+//! are built on demand by `python3 meshes/generate.py vm272_L6 vm272_L7` (needs
+//! `pip install gmsh`); a missing level is skipped with that hint.
+//!
+//! Each level runs in its own `stickslip` process, timed as a process (wall time). With a
+//! model cache (`--cache`), each level runs twice against a fresh cache directory: cold (a
+//! miss, the cache written) and warm (a hit); the phases reported are the cold run's.
+//!
+//! Printed (and written to `out/bench/scaling.md`, the table to `out/bench/scaling.csv`):
+//! * per level: DOFs, constraint rows, the phases of `summary.json` (`read`, `assemble`,
+//!   `analyse`, `factorise`, `condense` — the Delassus operator —, `solve` with its
+//!   `contact Newton` part, `write` and `write_wait`), the process wall time, peak memory
+//!   and peak memory per DOF, the warm run's wall time;
+//! * the least-squares exponent of each phase against DOFs over `SCALING_FIT` (default L3–L7);
+//! * the issue's ratios: wall / floor of the shipped case on L5 (floor = assemble + analyse +
+//!   factorise), warm / cold wall on L5, wall / floor on L7, factorise L7 / L5.
+//!
+//! Run: `cargo bench --bench scaling`. Environment: `STICKSLIP_THREADS` (default 2),
+//! `SCALING_LEVELS` (default `0-7`, or a list `4,5,7`), `SCALING_FIT` (default `3-7`).
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn levels(var: &str, default: &str) -> Vec<usize> {
+    let s = std::env::var(var).unwrap_or_else(|_| default.into());
+    if let Some((a, b)) = s.split_once('-') {
+        let (a, b): (usize, usize) = (a.trim().parse().unwrap(), b.trim().parse().unwrap());
+        (a..=b).collect()
+    } else {
+        s.split(',').map(|x| x.trim().parse().unwrap()).collect()
+    }
+}
+
+/// Runs `stickslip run CASE --out OUT --quiet --threads T [extra…]`; returns success, the
+/// process wall time and `summary.json`.
+fn run(case: &Path, out: &Path, threads: &str, extra: &[&str]) -> (bool, f64, Value) {
+    let t = std::time::Instant::now();
+    let st = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .arg("run")
+        .arg(case)
+        .args([
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+            "--threads",
+            threads,
+        ])
+        .args(extra)
+        .status()
+        .expect("the stickslip binary runs");
+    let wall = t.elapsed().as_secs_f64();
+    let json = std::fs::read_to_string(out.join("summary.json"))
+        .ok()
+        .and_then(|s| serde_json::from_str(&s).ok())
+        .unwrap_or(Value::Null);
+    (st.success(), wall, json)
+}
+
+/// Whether the binary has a model cache (`--cache DIR`).
+fn has_cache() -> bool {
+    let out = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args(["run", "--help"])
+        .output()
+        .expect("the stickslip binary runs");
+    String::from_utf8_lossy(&out.stdout).contains("--cache")
+}
+
+/// Least-squares slope of log y against log x.
+fn slope(pts: &[(f64, f64)]) -> Option<f64> {
+    let p: Vec<(f64, f64)> = pts
+        .iter()
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0)
+        .map(|(x, y)| (x.ln(), y.ln()))
+        .collect();
+    if p.len() < 2 {
+        return None;
+    }
+    let n = p.len() as f64;
+    let (mx, my) = (
+        p.iter().map(|q| q.0).sum::<f64>() / n,
+        p.iter().map(|q| q.1).sum::<f64>() / n,
+    );
+    let sxy: f64 = p.iter().map(|q| (q.0 - mx) * (q.1 - my)).sum();
+    let sxx: f64 = p.iter().map(|q| (q.0 - mx).powi(2)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+const PHASES: [&str; 8] = [
+    "read",
+    "assemble",
+    "analyse",
+    "factorise",
+    "condense",
+    "solve",
+    "write",
+    "write_wait",
+];
+
+struct Row {
+    level: usize,
+    dofs: f64,
+    constraints: f64,
+    phases: Vec<f64>,
+    contact: f64,
+    wall: f64,
+    warm: Option<f64>,
+    peak: f64,
+    status: String,
+}
+
+fn main() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let threads = std::env::var("STICKSLIP_THREADS").unwrap_or_else(|_| "2".into());
+    let work = root.join("out/bench/scaling");
+    let _ = std::fs::remove_dir_all(&work);
+    std::fs::create_dir_all(&work).unwrap();
+    let shipped: Value =
+        serde_json::from_str(&std::fs::read_to_string(root.join("cases/fig2.json")).unwrap())
+            .unwrap();
+    let cache = has_cache();
+    let mut rows = Vec::new();
+    for l in levels("SCALING_LEVELS", "0-7") {
+        let mesh = root.join(format!("meshes/vm272_L{l}.msh"));
+        if !mesh.exists() {
+            println!(
+                "L{l}: {} missing, skipped (build it: python3 meshes/generate.py vm272_L{l})",
+                mesh.display()
+            );
+            continue;
+        }
+        let mut case = shipped.clone();
+        case["mesh"] = Value::String(mesh.to_str().unwrap().into());
+        let path = work.join(format!("fig2_L{l}.json"));
+        std::fs::write(&path, serde_json::to_string_pretty(&case).unwrap()).unwrap();
+        let cache_dir = work.join(format!("cache_L{l}"));
+        let cache_args: Vec<&str> = if cache {
+            vec!["--cache", cache_dir.to_str().unwrap()]
+        } else {
+            vec![]
+        };
+        let (ok, wall, s) = run(&path, &work.join(format!("L{l}")), &threads, &cache_args);
+        let warm = cache.then(|| {
+            run(
+                &path,
+                &work.join(format!("L{l}_warm")),
+                &threads,
+                &cache_args,
+            )
+            .1
+        });
+        let t = &s["timings_s"];
+        let row = Row {
+            level: l,
+            dofs: s["dofs_free"].as_f64().unwrap_or(0.0),
+            constraints: s["contact_nodes"].as_f64().unwrap_or(0.0) * 2.0,
+            phases: PHASES
+                .iter()
+                .map(|p| t[*p].as_f64().unwrap_or(0.0))
+                .collect(),
+            contact: s["contact_solve_s"].as_f64().unwrap_or(0.0),
+            wall,
+            warm,
+            peak: s["peak_memory_mib"].as_f64().unwrap_or(0.0),
+            status: if ok {
+                s["status"].as_str().unwrap_or("?").to_string()
+            } else {
+                "failed".into()
+            },
+        };
+        eprintln!("L{l}: {:.2} s, {}", row.wall, row.status);
+        rows.push(row);
+    }
+    let mut md = String::new();
+    md += &format!(
+        "Fig. 2 (`cases/fig2.json` as shipped, VTU every 10th step), {threads} threads. Times in s.\n\n"
+    );
+    md += "| L | DOFs | constraint rows | read | assemble | analyse | factorise | condense | solve | contact Newton | write | write wait | wall | floor | wall / floor | warm wall | warm / cold | peak MiB | KiB per DOF | status |\n";
+    md += &format!("|{}\n", "---|".repeat(21));
+    let mut csv = String::from(
+        "level,dofs,constraints,read,assemble,analyse,factorise,condense,solve,write,write_wait,contact_newton,wall,warm_wall,peak_mib,status\n",
+    );
+    let floor = |r: &Row| r.phases[1] + r.phases[2] + r.phases[3];
+    for r in &rows {
+        let p = &r.phases;
+        let warm = r.warm.map_or("—".into(), |w| format!("{w:.2}"));
+        let ratio = r.warm.map_or("—".into(), |w| format!("{:.2}", w / r.wall));
+        md += &format!(
+            "| {} | {:.0} | {:.0} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {} | {} | {:.0} | {:.2} | {} |\n",
+            r.level,
+            r.dofs,
+            r.constraints,
+            p[0],
+            p[1],
+            p[2],
+            p[3],
+            p[4],
+            p[5],
+            r.contact,
+            p[6],
+            p[7],
+            r.wall,
+            floor(r),
+            r.wall / floor(r),
+            warm,
+            ratio,
+            r.peak,
+            r.peak * 1024.0 / r.dofs,
+            r.status
+        );
+        csv += &format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            r.level,
+            r.dofs,
+            r.constraints,
+            p[0],
+            p[1],
+            p[2],
+            p[3],
+            p[4],
+            p[5],
+            p[6],
+            p[7],
+            r.contact,
+            r.wall,
+            r.warm.map_or(String::new(), |w| w.to_string()),
+            r.peak,
+            r.status
+        );
+    }
+    let fit = levels("SCALING_FIT", "3-7");
+    let fitted: Vec<&Row> = rows.iter().filter(|r| fit.contains(&r.level)).collect();
+    md += &format!(
+        "\nFitted exponents (least-squares slope of log time against log DOFs over L{}–L{}):\n\n| phase | exponent |\n|---|---|\n",
+        fit.first().unwrap(),
+        fit.last().unwrap()
+    );
+    let mut series: Vec<(&str, Vec<(f64, f64)>)> = PHASES
+        .iter()
+        .enumerate()
+        .map(|(i, name)| {
+            (
+                *name,
+                fitted.iter().map(|r| (r.dofs, r.phases[i])).collect(),
+            )
+        })
+        .collect();
+    series.push((
+        "contact Newton",
+        fitted.iter().map(|r| (r.dofs, r.contact)).collect(),
+    ));
+    series.push(("floor", fitted.iter().map(|r| (r.dofs, floor(r))).collect()));
+    series.push(("wall", fitted.iter().map(|r| (r.dofs, r.wall)).collect()));
+    series.push((
+        "peak memory",
+        fitted.iter().map(|r| (r.dofs, r.peak)).collect(),
+    ));
+    for (name, pts) in &series {
+        let e = slope(pts).map_or("—".into(), |e| format!("{e:.2}"));
+        md += &format!("| {name} | {e} |\n");
+    }
+    let at = |l: usize| rows.iter().find(|r| r.level == l);
+    md += "\nThe issue's ratios (same run):\n\n";
+    if let Some(r5) = at(5) {
+        md += &format!(
+            "* Fig. 2 on L5: process wall / (assemble + analyse + factorise) = {:.2} / {:.2} = **{:.2}** (target ≤ 1.3)\n",
+            r5.wall,
+            floor(r5),
+            r5.wall / floor(r5)
+        );
+        if let Some(w) = r5.warm {
+            md += &format!(
+                "* Fig. 2 on L5, second run (model cache hit) / first: {:.2} / {:.2} = **{:.2}** (target ≤ 0.35)\n",
+                w,
+                r5.wall,
+                w / r5.wall
+            );
+        }
+    }
+    if let Some(r7) = at(7) {
+        md += &format!(
+            "* Fig. 2 on L7: process wall / floor = {:.2} / {:.2} = **{:.2}** (target ≤ 1.5)\n",
+            r7.wall,
+            floor(r7),
+            r7.wall / floor(r7)
+        );
+        if let Some(r5) = at(5) {
+            md += &format!(
+                "* factorise L7 / L5 = {:.2} / {:.2} = **{:.1}** (target ≤ 6)\n",
+                r7.phases[3],
+                r5.phases[3],
+                r7.phases[3] / r5.phases[3]
+            );
+        }
+    }
+    if !cache {
+        md += "\n(This binary has no model cache: no warm runs.)\n";
+    }
+    println!("{md}");
+    std::fs::write(root.join("out/bench/scaling.md"), &md).unwrap();
+    std::fs::write(root.join("out/bench/scaling.csv"), &csv).unwrap();
+}
