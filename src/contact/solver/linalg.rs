@@ -48,12 +48,6 @@ pub struct LuCache {
     k_pos: Vec<usize>,
     k_llt: Option<faer::linalg::solvers::Llt<f64>>,
     k_cols: Vec<Vec<f64>>,
-    /// The LU of the last capacitance matrix and the rows of `K` it was for: while an
-    /// iteration has the same special rows, it preconditions GMRES on the new capacitance
-    /// system instead of a fresh `p × p` LU (the coefficients of slip rows change a little from
-    /// one iteration to the next, the rows themselves seldom).
-    cap_rows: Vec<usize>,
-    cap_lu: Option<faer::linalg::solvers::PartialPivLu<f64>>,
     /// Factorisations done (of `K` or of a dense Newton matrix) and GMRES iterations spent (for
     /// the run summary).
     pub factorisations: usize,
@@ -79,8 +73,6 @@ impl LuCache {
         self.k_unk.clear();
         self.k_pos.clear();
         self.k_cols.clear();
-        self.cap_rows.clear();
-        self.cap_lu = None;
     }
 
     /// Solves the structured Newton system `rows` (see [`super::ContactSystem::newton_rows`]) with the
@@ -205,37 +197,19 @@ impl LuCache {
     /// The Woodbury step from `x = x0 = K⁻¹ b`: solves `C y = B x0` and sets `x = x0 − G y`;
     /// returns `y`, or `None` if `C` is near-singular.
     fn woodbury_correction(
-        &mut self,
+        &self,
         special: &[SpecialRow],
         b: &[f64],
         x: &mut [f64],
     ) -> Option<Vec<f64>> {
         let p = special.len();
         let (cap, rhs) = self.capacitance_system(special, b, x);
-        let same_rows =
-            self.cap_rows.len() == p && self.cap_rows.iter().zip(special).all(|(&r, s)| r == s.row);
-        let reused = match (&self.cap_lu, same_rows) {
-            (Some(lu), true) => gmres(&cap, &rhs, lu, 1e-13, GMRES_MAX),
-            _ => None,
-        };
-        let y = match reused {
-            Some((y, its)) => {
-                self.gmres_iterations += its;
-                y
-            }
-            None => {
-                let clu = cap.partial_piv_lu();
-                self.cap_rows = special.iter().map(|s| s.row).collect();
-                // Near-singular (gross sliding, a free direction): the dense system decides.
-                if (0..p).any(|i| clu.U()[(i, i)].abs() <= 1e-10) {
-                    self.cap_lu = None;
-                    return None;
-                }
-                let y = clu.solve(&rhs);
-                self.cap_lu = Some(clu);
-                y
-            }
-        };
+        let clu = cap.partial_piv_lu();
+        // Near-singular (gross sliding, a free direction): the dense system decides.
+        if (0..p).any(|i| clu.U()[(i, i)].abs() <= 1e-10) {
+            return None;
+        }
+        let y = clu.solve(&rhs);
         let y_cap: Vec<f64> = (0..p).map(|j| y[(j, 0)]).collect();
         for (sj, yj) in special.iter().zip(&y_cap) {
             for (xi, gi) in x.iter_mut().zip(&self.k_cols[sj.row]) {
@@ -350,8 +324,6 @@ impl LuCache {
         self.k_unk.clear();
         self.k_pos.clear();
         self.k_cols.clear();
-        self.cap_rows.clear();
-        self.cap_lu = None;
         let llt = llt?;
         // The pivots are L_ii²: as for an LU, singular when the smallest is below 1e-12 of the
         // largest; and pivots within 2^52 of the smallest normal number have lost digits to
