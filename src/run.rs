@@ -183,6 +183,7 @@ pub fn run_model(
                     id: id.clone(),
                     candidate_gap,
                     checkpoint: c.clone(),
+                    // The writer fills in the `.pvd` entries written with the step's files.
                     pvd: Vec::new(),
                     energy: energy.as_ref().map(EnergyMeter::saved),
                 }),

@@ -135,7 +135,7 @@ impl<'a> Series<'a> {
 /// A [`Series`] written on a thread of its own, fed through a channel of depth one: the
 /// driver hands it a step and goes on, and waits only when a step is still queued.
 pub struct Background<'scope> {
-    tx: Option<SyncSender<StepOutput>>,
+    tx: SyncSender<StepOutput>,
     /// The writer thread: its busy seconds, or its first error. `None` once joined.
     handle: Option<ScopedJoinHandle<'scope, Result<f64, RunError>>>,
     /// Seconds the caller spent waiting for the writer.
@@ -157,7 +157,7 @@ impl<'scope> Background<'scope> {
             })
             .expect("the writer thread starts");
         Background {
-            tx: Some(tx),
+            tx,
             handle: Some(handle),
             wait: 0.0,
         }
@@ -173,14 +173,12 @@ impl<'scope> Background<'scope> {
     }
 
     /// Hands a step to the writer, waiting while the previous one is still queued; the
-    /// writer's error if it has stopped on one.
+    /// writer's error if it has stopped on one (after which the run stops: nothing more is
+    /// sent, and [`Self::finish`] joins nothing).
     pub fn send(&mut self, step: StepOutput) -> Result<(), RunError> {
         self.check()?;
-        let Some(tx) = &self.tx else {
-            unreachable!("steps are sent before the writer is finished")
-        };
         let t = Instant::now();
-        let sent = tx.send(step);
+        let sent = self.tx.send(step);
         self.wait += t.elapsed().as_secs_f64();
         match sent {
             Ok(()) => Ok(()),
@@ -192,15 +190,16 @@ impl<'scope> Background<'scope> {
     /// Waits for the writer to write every step handed to it: (its busy seconds, the seconds
     /// the caller spent waiting for it), or its error (`Ok` with no busy time if the error was
     /// already returned by [`Self::check`] or [`Self::send`]).
-    pub fn finish(mut self) -> Result<(f64, f64), RunError> {
-        drop(self.tx.take());
-        let Some(h) = self.handle.take() else {
-            return Ok((0.0, self.wait));
+    pub fn finish(self) -> Result<(f64, f64), RunError> {
+        let Background { tx, handle, wait } = self;
+        // No more steps: the writer ends once it has written those queued.
+        drop(tx);
+        let Some(h) = handle else {
+            return Ok((0.0, wait));
         };
         let t = Instant::now();
         let busy = join(h)?;
-        self.wait += t.elapsed().as_secs_f64();
-        Ok((busy, self.wait))
+        Ok((busy, wait + t.elapsed().as_secs_f64()))
     }
 
     /// Joins the writer thread, which has stopped early: its error.
