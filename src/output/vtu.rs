@@ -186,14 +186,12 @@ pub fn unstructured(
         ("Cells", &cell_arrays_topology),
     ];
 
-    // Compressed arrays are encoded first (their sizes give the offsets); raw ones are
-    // written straight into the file after the header.
+    // Compressed arrays are encoded first (their sizes give the offsets), in parallel; raw
+    // ones are written straight into the file after the header.
     let encoded: Option<Vec<Vec<u8>>> = compress.then(|| {
-        sections
-            .iter()
-            .flat_map(|(_, arrays)| arrays.iter())
-            .map(|a| zlib_block(&a.values))
-            .collect()
+        use rayon::prelude::*;
+        let all: Vec<&Array> = sections.iter().flat_map(|(_, a)| a.iter()).collect();
+        all.par_iter().map(|a| zlib_block(&a.values)).collect()
     });
     let sizes: Vec<usize> = match &encoded {
         Some(e) => e.iter().map(Vec::len).collect(),
