@@ -48,7 +48,7 @@ fn main() {
             + g("factorise")
             + g("condense")
             + g("solve")
-            + g("write");
+            + g("write_wait");
         println!(
             "| {case} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} (process {wall:.2}) | {:.2} | {:.0} |",
             s["steps"].as_array().unwrap().len(),

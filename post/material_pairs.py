@@ -20,7 +20,6 @@ OUT/pair_jkr_beta0.json) unless --no-beta0.
 without it the script checks that the case files agree with the tables.
 """
 import argparse
-import base64
 import glob
 import json
 import math
@@ -29,6 +28,7 @@ import re
 import subprocess
 import sys
 import time
+import zlib
 
 import numpy as np
 
@@ -137,17 +137,31 @@ def all_cases():
 # reading the output
 # ---------------------------------------------------------------------------------------------
 def vtu_arrays(path, names):
-    """Inline-binary (base64, UInt64 header, uncompressed) DataArrays of a .vtu by name."""
-    text = open(path).read()
+    """DataArrays of a .vtu by name: appended raw data (UInt64 headers), each array raw or in
+    zlib blocks (`compressor="vtkZLibDataCompressor"`, `output.compress`)."""
+    data = open(path, "rb").read()
+    app = data.index(b"<AppendedData")
+    start = data.index(b"_", app) + 1
+    head = data[:app].decode()
+    compressed = 'compressor="vtkZLibDataCompressor"' in head
     dtypes = {"Float64": "<f8", "UInt64": "<u8", "UInt8": "u1", "Int64": "<i8"}
     out = {}
-    for m in re.finditer(r'<DataArray type="(\w+)" Name="(\w+)" format="binary"[^>]*>([^<]*)<',
-                         text):
-        typ, name, data = m.groups()
-        if name in names:
-            raw = base64.b64decode(data.strip())
-            n = int(np.frombuffer(raw[:8], "<u8")[0])
-            out[name] = np.frombuffer(raw[8:8 + n], dtypes[typ])
+    for m in re.finditer(r'<DataArray type="(\w+)" Name="(\w+)"[^>]*offset="(\d+)"', head):
+        typ, name, offset = m.groups()
+        if name not in names:
+            continue
+        p = start + int(offset)
+        if compressed:
+            nblocks = int(np.frombuffer(data[p:p + 8], "<u8")[0])
+            sizes = np.frombuffer(data[p + 24:p + 24 + 8 * nblocks], "<u8")
+            q, raw = p + 24 + 8 * nblocks, b""
+            for c in sizes:
+                raw += zlib.decompress(data[q:q + int(c)])
+                q += int(c)
+        else:
+            n = int(np.frombuffer(data[p:p + 8], "<u8")[0])
+            raw = data[p + 8:p + 8 + n]
+        out[name] = np.frombuffer(raw, dtypes[typ])
     missing = set(names) - set(out)
     if missing:
         die(f"{path}: arrays {sorted(missing)} not found")

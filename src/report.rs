@@ -203,7 +203,7 @@ pub fn end_summary(case_path: &Path, s: &Summary, out_dir: &Path, stem: &str) ->
         );
     }
     o += &format!(
-        "  time      read {:.3}, assemble {:.3}, analyse {:.3}, factorise {:.3}, condense {:.3}, solve {:.3}, write {:.3} s; peak memory {}\n",
+        "  time      read {:.3}, assemble {:.3}, analyse {:.3}, factorise {:.3}, condense {:.3}, solve {:.3}, write {:.3} (waited for {:.3}) s; peak memory {}\n",
         t.read,
         t.assemble,
         t.analyse,
@@ -211,6 +211,7 @@ pub fn end_summary(case_path: &Path, s: &Summary, out_dir: &Path, stem: &str) ->
         t.condense,
         t.solve,
         t.write,
+        t.write_wait,
         s.peak_memory_mib
             .map_or("unknown".into(), |m| format!("{m:.0} MiB"))
     );

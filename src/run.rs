@@ -3,14 +3,13 @@
 //! ([`crate::output::fields`]) and the report at the end ([`crate::report`]).
 
 use crate::case::Case;
-use crate::contact::solver::State;
 pub use crate::driver::{
     LogLevel, MAX_CUTBACKS, Restart, Simulation, StepEvent, simulate, simulate_with,
 };
 use crate::energy::EnergyMeter;
 pub use crate::error::RunError;
 use crate::model::Model;
-use crate::output::series::{Series, write_file};
+use crate::output::series::{Background, Series, StepOutput, write_file};
 use crate::report::{Summary, end_summary, history_csv, print_warnings, summarise};
 use crate::restart::{self, SavedRun};
 use std::path::{Path, PathBuf};
@@ -141,7 +140,7 @@ pub fn run_model(
     let level = opts.level();
     let progress = Progress::new(case, level);
     let law = model.friction.clone();
-    let mut series = Series::new(&model, case, out_dir, &stem);
+    let mut series = Series::new(&model, out_dir, &stem, case.output.compress);
     let mut energy = case.tracks_energy().then(|| EnergyMeter::new(&model));
     let candidate_gap = model.contact.as_ref().map(|c| c.pair.candidate_gap);
     let mut from = None;
@@ -157,59 +156,65 @@ pub fn run_model(
         every: case.output.vtu.then_some(case.output.every),
         from,
     };
-    // The last converged step not yet written (`output.every` > 1).
-    let mut unwritten: Option<Unwritten> = None;
-    let mut on_step = |ev: &StepEvent| {
-        progress.step(ev);
-        if let Some(m) = energy.as_mut() {
-            m.step(&model, ev);
-        }
-        if !case.output.vtu {
-            return Ok(());
-        }
-        if ev.step.is_multiple_of(case.output.every) || ev.last {
-            unwritten = None;
-            series.write_step(ev.step, ev.time, ev.scale, ev.u, ev.contact)?;
-            // The state to resume from, after the step's files.
-            if let Some(c) = ev.checkpoint {
-                let saved = SavedRun {
-                    format: restart::FORMAT,
-                    id: id.clone(),
-                    candidate_gap,
-                    checkpoint: c.clone(),
-                    pvd: series.entries().to_vec(),
-                    energy: energy.as_ref().map(EnergyMeter::saved),
-                };
-                write_file(
-                    &out_dir.join(restart::state_name(ev.step)),
-                    serde_json::to_string(&saved)
-                        .expect("serialisable")
-                        .as_bytes(),
-                )?;
+    // The steps are written on a thread of their own while the next ones are solved.
+    let (sim, t_write, t_wait) = std::thread::scope(|scope| {
+        let mut writer = Background::spawn(scope, series);
+        // The last converged step not yet written (`output.every` > 1).
+        let mut unwritten: Option<StepOutput> = None;
+        let mut on_step = |ev: &StepEvent| {
+            progress.step(ev);
+            if let Some(m) = energy.as_mut() {
+                m.step(&model, ev);
             }
-            Ok(())
-        } else {
-            // Kept so that a run that stops early still writes its last converged state.
-            unwritten = Some(Unwritten {
+            if !case.output.vtu {
+                return Ok(());
+            }
+            // A write that failed stops the run at its next step.
+            writer.check()?;
+            let out = StepOutput {
                 step: ev.step,
                 time: ev.time,
                 scale: ev.scale,
                 u: ev.u.cloned(),
                 contact: ev.contact.cloned(),
-            });
-            Ok(())
+                // The state to resume from, written after the step's files.
+                state: ev.checkpoint.map(|c| SavedRun {
+                    format: restart::FORMAT,
+                    id: id.clone(),
+                    candidate_gap,
+                    checkpoint: c.clone(),
+                    // The writer fills in the `.pvd` entries written with the step's files.
+                    pvd: Vec::new(),
+                    energy: energy.as_ref().map(EnergyMeter::saved),
+                }),
+            };
+            if ev.step.is_multiple_of(case.output.every) || ev.last {
+                unwritten = None;
+                writer.send(out)
+            } else {
+                // Kept so that a run that stops early still writes its last converged state.
+                unwritten = Some(out);
+                Ok(())
+            }
+        };
+        let sim = simulate_with(&model, case, law.as_ref(), level, &mut on_step, restart);
+        let sim = match sim {
+            Ok(sim) => sim,
+            // The steps handed to the writer are written first; its error came first.
+            Err(e) => return Err(writer.finish().err().unwrap_or(e)),
+        };
+        if let Some(w) = unwritten.take()
+            && sim.failure.is_some()
+        {
+            writer.send(w)?;
         }
-    };
-    let sim = simulate_with(&model, case, law.as_ref(), level, &mut on_step, restart)?;
-    if let Some(w) = unwritten.take()
-        && sim.failure.is_some()
-    {
-        series.write_step(w.step, w.time, w.scale, w.u.as_ref(), w.contact.as_ref())?;
-    }
+        let (t_write, t_wait) = writer.finish()?;
+        Ok((sim, t_write, t_wait))
+    })?;
     progress.finish();
-    let t_write = series.seconds;
     model.timings.solve = sim.solve_s;
     model.timings.write = t_write;
+    model.timings.write_wait = t_wait;
     write_file(
         &out_dir.join("history.csv"),
         history_csv(&sim.records).as_bytes(),
@@ -242,15 +247,6 @@ pub fn run_model(
         return Err(e);
     }
     Ok(summary)
-}
-
-/// A converged step kept in memory until it is written.
-struct Unwritten {
-    step: usize,
-    time: f64,
-    scale: f64,
-    u: Option<Vec<f64>>,
-    contact: Option<State>,
 }
 
 /// The progress shown while a run steps: a bar on a terminal, a line per step otherwise.

@@ -97,6 +97,55 @@ fn good_case_runs_and_writes_everything() {
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
 
+/// A step whose file cannot be written (a directory in its place) stops the run with exit
+/// status 4 and a message naming the file, although the steps are written on a thread of
+/// their own while the next ones are solved: the files of the steps before it, each whole,
+/// and nothing of it or after it (no later step, state, history or summary).
+#[test]
+fn write_error_stops_the_run_with_the_earlier_steps_kept() {
+    let dir = tempdir("write-error");
+    let case = dir.join("case.json");
+    let v = shipped_case_on("vm272_cm.json", "vm272_L1.msh");
+    std::fs::write(&case, serde_json::to_string(&v).unwrap()).unwrap();
+    let out = dir.join("out");
+    std::fs::create_dir_all(out.join("case_0003.vtu")).unwrap();
+    let (code, _, err) = stickslip(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 4, "{err}");
+    assert!(
+        err.contains("case_0003.vtu") && err.contains("cannot write output"),
+        "{err}"
+    );
+    let mut files: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .collect();
+    files.sort();
+    assert_eq!(
+        files,
+        [
+            "case.pvd",
+            "case_0001.vtu",
+            "case_0002.vtu",
+            "case_0003.vtu",
+            "case_contact_0001.vtu",
+            "case_contact_0002.vtu",
+            "contact_0001.csv",
+            "contact_0002.csv",
+            "state_0001.json",
+            "state_0002.json",
+        ]
+    );
+    let pvd = std::fs::read_to_string(out.join("case.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 4, "{pvd}");
+    assert!(out.join("case_0003.vtu").is_dir());
+}
+
 #[test]
 fn unknown_key_is_named_with_its_line() {
     let case = GOOD_CASE.replace("\"steps\": 2", "\"steps\": 2, \"stpes\": 3");

@@ -3,6 +3,7 @@
 //! extent; and the CSV carries the documented columns.
 
 mod common;
+use common::vtu::Vtu;
 use common::{run_case, shipped_case_on, validation_row};
 use serde_json::json;
 
@@ -34,14 +35,8 @@ fn contact_csv_and_vtu_hold_the_same_nodes() {
             csv.col(col);
         }
         let step = r.history().rows.last().unwrap()[0] as usize;
-        let vtu =
-            std::fs::read_to_string(r.out.join(format!("case_contact_{step:04}.vtu"))).unwrap();
-        let points: usize = vtu
-            .split("NumberOfPoints=\"")
-            .nth(1)
-            .and_then(|t| t.split('"').next())
-            .and_then(|n| n.parse().ok())
-            .unwrap();
+        let vtu = Vtu::read(&r.out.join(format!("case_contact_{step:04}.vtu"))).unwrap();
+        let points = vtu.points;
         let (xc, xs) = (csv.col("x"), &csv.rows);
         let extent = xs.iter().map(|r| r[xc].abs()).fold(0.0, f64::max);
         println!(

@@ -4,8 +4,8 @@
 //! loading, 11 steps) on the mesh `vm272_L2`.
 //!
 //! On a difference the test names the file, and for a CSV the column, the row and the largest
-//! absolute and relative difference; for a `.vtu` the data array holding the first differing
-//! byte.
+//! absolute and relative difference; for a `.vtu` the data array of its appended section (or
+//! the XML header) holding the first differing byte.
 
 mod common;
 use common::*;
@@ -79,19 +79,12 @@ fn csv_diff(a: &str, b: &str) -> Vec<String> {
     out
 }
 
-/// The `Name` of the XML data array that contains byte `pos` of a `.vtu`.
-fn vtu_array_at(text: &[u8], pos: usize) -> String {
-    let before = String::from_utf8_lossy(&text[..pos]);
-    match before.rfind("<DataArray") {
-        Some(i) => {
-            let tag = &before[i..];
-            let tag = &tag[..tag.find('>').unwrap_or(tag.len())];
-            match tag.find("Name=\"") {
-                Some(j) => tag[j + 6..].split('"').next().unwrap_or("").to_string(),
-                None => "(points)".into(),
-            }
-        }
-        None => "(header)".into(),
+/// What holds byte `pos` of a `.vtu` (the XML header, or a data array of the appended
+/// section), read from the file `a`.
+fn vtu_array_at(a: &[u8], pos: usize) -> String {
+    match common::vtu::Vtu::parse(a) {
+        Ok(v) => v.what_holds(pos),
+        Err(e) => format!("(unreadable: {e})"),
     }
 }
 
@@ -138,7 +131,7 @@ fn one_and_two_threads_give_identical_files() {
                 .position(|(x, y)| x != y)
                 .unwrap_or(a.len().min(b.len()));
             diffs.push(format!(
-                "{name}: first difference at byte {pos}, in data array `{}` (sizes {} and {})",
+                "{name}: first difference at byte {pos}, in {} (sizes {} and {})",
                 vtu_array_at(&a, pos),
                 a.len(),
                 b.len()

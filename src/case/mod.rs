@@ -214,6 +214,10 @@ pub struct Output {
     /// Write every n-th step (the last step is always written).
     #[serde(default = "one")]
     pub every: usize,
+    /// Compress the arrays of the `.vtu` files (zlib, one block per array): smaller files,
+    /// slower to write. Default: raw binary.
+    #[serde(default)]
+    pub compress: bool,
     /// Keep the energy balance of every step (`energy.csv`, `summary.json`'s `energy`): the
     /// work of the pilot, tractions and supports, the elastic energy and the frictional
     /// dissipation. Default: on for cases with a cycle group, off otherwise (it recovers the
@@ -235,6 +239,7 @@ impl Default for Output {
             dir: None,
             vtu: true,
             every: 1,
+            compress: false,
             energy: None,
         }
     }

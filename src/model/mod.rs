@@ -53,7 +53,12 @@ pub struct Timings {
     pub factorise: f64,
     pub condense: f64,
     pub solve: f64,
+    /// The output writer's busy time: it writes on a thread of its own, while the next steps
+    /// are solved.
     pub write: f64,
+    /// Time the run spent waiting for the output writer (a step still queued, and the last
+    /// steps at the end): the part of `write` that adds to the wall time.
+    pub write_wait: f64,
 }
 
 /// The assembled model.

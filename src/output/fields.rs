@@ -1,7 +1,6 @@
 //! The fields written per step: the bodies' VTU (displacement, stresses), and the contact
 //! surface's VTU and CSV (pressure, shear, gap, slip, status, μ, q/p).
 
-use crate::case::Case;
 use crate::contact::solver::State;
 use crate::model::Model;
 use crate::output::{self, vtu};
@@ -42,8 +41,9 @@ const CONTACT_FIELDS: [&str; 9] = [
     "slip_mu",
 ];
 
-/// The contact dataset: the slave edges of the candidate zone with the nodal contact fields.
-pub fn contact_vtu(model: &Model, st: &State) -> Result<Vec<u8>, vtkio::Error> {
+/// The contact dataset: the slave edges of the candidate zone with the nodal contact fields
+/// (`compress`: zlib-compressed arrays).
+pub fn contact_vtu(model: &Model, st: &State, compress: bool) -> Vec<u8> {
     let cm = model.contact.as_ref().expect("contact");
     let m = &cm.pair.mortar;
     let mut index = std::collections::HashMap::new();
@@ -103,7 +103,7 @@ pub fn contact_vtu(model: &Model, st: &State) -> Result<Vec<u8>, vtkio::Error> {
     }
     data.push(vtu::Field::vector("traction", traction));
     data.push(vtu::Field::vector("normal", normal));
-    vtu::unstructured("contact", &points, &cells, vtu::Kind::Line3, data, vec![])
+    vtu::unstructured(&points, &cells, vtu::Kind::Line3, &data, &[], compress)
 }
 
 /// The per-step CSV along the slave face.
@@ -126,8 +126,9 @@ pub fn contact_csv(model: &Model, st: &State) -> String {
     output::csv(&header, &rows, &["status"])
 }
 
-/// The bodies dataset of one step: displacement, stresses, von Mises, body id.
-pub fn bodies_vtu(model: &Model, u: &[f64], case: &Case) -> Result<Vec<u8>, vtkio::Error> {
+/// The bodies dataset of one step: displacement, stresses, von Mises, body id
+/// (`compress`: zlib-compressed arrays).
+pub fn bodies_vtu(model: &Model, u: &[f64], compress: bool) -> Vec<u8> {
     let mut index = vec![usize::MAX; model.mesh.nodes.len()];
     let mut points = Vec::new();
     for (n, &a) in model.active.iter().enumerate() {
@@ -165,11 +166,10 @@ pub fn bodies_vtu(model: &Model, u: &[f64], case: &Case) -> Result<Vec<u8>, vtki
         .collect();
     let body: Vec<f64> = model.elem_body.iter().map(|&b| b as f64).collect();
     vtu::unstructured(
-        &case.title,
         &points,
         &cells,
         vtu::Kind::Tri6,
-        vec![
+        &[
             vtu::Field::vector("displacement", disp),
             vtu::Field::scalar("stress_xx", sxx),
             vtu::Field::scalar("stress_yy", syy),
@@ -177,6 +177,7 @@ pub fn bodies_vtu(model: &Model, u: &[f64], case: &Case) -> Result<Vec<u8>, vtki
             vtu::Field::scalar("stress_zz", szz),
             vtu::Field::scalar("von_mises", vm),
         ],
-        vec![vtu::Field::scalar("body_id", body)],
+        &[vtu::Field::scalar("body_id", body)],
+        compress,
     )
 }

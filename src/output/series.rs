@@ -1,14 +1,21 @@
 //! The time series of a run on disk: one `.vtu` of the bodies (and of the contact face) per
 //! written step, the contact CSV, and the `.pvd` collection rewritten after each step so that
-//! a run stopped at any point leaves a series ParaView opens.
+//! a run stopped at any point leaves a series ParaView opens; then the step's restart state.
+//!
+//! The steps are written by a background thread ([`Background`]) while the driver solves the
+//! next ones: it takes the steps in order from a channel of depth one and writes exactly the
+//! files, in exactly the order, that writing in the loop would, so a run's files do not depend
+//! on it. Its first error stops it; the driver sees that error at its next step, and stops.
 
 use super::fields::{bodies_vtu, contact_csv, contact_vtu};
 use super::{PvdEntry, pvd};
-use crate::case::Case;
 use crate::contact::solver::State;
 use crate::error::RunError;
 use crate::model::Model;
+use crate::restart::{self, SavedRun};
 use std::path::Path;
+use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::thread::{Scope, ScopedJoinHandle};
 use std::time::Instant;
 
 /// Writes `bytes` to `path` atomically, the error naming the file.
@@ -19,24 +26,39 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
     })
 }
 
+/// One converged step to write, with its own copy of what it needs.
+pub struct StepOutput {
+    pub step: usize,
+    pub time: f64,
+    pub scale: f64,
+    /// The free solution (runs without contact).
+    pub u: Option<Vec<f64>>,
+    /// The contact state (runs with contact: the bodies' field is recovered from it).
+    pub contact: Option<State>,
+    /// The restart state to write after the step's files; its `.pvd` entries are filled in
+    /// with those written so far.
+    pub state: Option<SavedRun>,
+}
+
 /// The writer of a run's series of steps.
 pub struct Series<'a> {
     model: &'a Model,
-    case: &'a Case,
     dir: &'a Path,
     stem: &'a str,
+    /// zlib-compressed `.vtu` arrays (`output.compress`).
+    compress: bool,
     entries: Vec<PvdEntry>,
     /// Seconds spent writing so far.
     pub seconds: f64,
 }
 
 impl<'a> Series<'a> {
-    pub fn new(model: &'a Model, case: &'a Case, dir: &'a Path, stem: &'a str) -> Self {
+    pub fn new(model: &'a Model, dir: &'a Path, stem: &'a str, compress: bool) -> Self {
         Series {
             model,
-            case,
             dir,
             stem,
+            compress,
             entries: Vec::new(),
             seconds: 0.0,
         }
@@ -53,41 +75,36 @@ impl<'a> Series<'a> {
         &self.entries
     }
 
-    /// Writes the files of one converged step and rewrites the `.pvd`: the bodies' fields from
-    /// the free solution `u` or, with contact, recovered from the contact state.
-    pub fn write_step(
-        &mut self,
-        step: usize,
-        time: f64,
-        scale: f64,
-        u: Option<&Vec<f64>>,
-        contact: Option<&State>,
-    ) -> Result<(), RunError> {
+    /// Writes the files of one converged step and rewrites the `.pvd` (the bodies' fields from
+    /// the free solution or, with contact, recovered from the contact state), then its restart
+    /// state if it has one.
+    pub fn write(&mut self, s: StepOutput) -> Result<(), RunError> {
         let t = Instant::now();
-        let (model, stem) = (self.model, self.stem);
-        let vtk_error = |name: &str, e: vtkio::Error| RunError::Write {
-            path: name.to_string(),
-            source: std::io::Error::other(e.to_string()),
-        };
+        let (model, stem, step) = (self.model, self.stem, s.step);
         let name = format!("{stem}_{step:04}.vtu");
-        let u = match (u, contact) {
-            (Some(u), _) => u.clone(),
-            (None, Some(st)) => model.contact_displacement(scale, st),
+        let recovered;
+        let u = match (&s.u, &s.contact) {
+            (Some(u), _) => u,
+            (None, Some(st)) => {
+                recovered = model.contact_displacement(s.scale, st);
+                &recovered
+            }
             (None, None) => unreachable!("a step has a solution or a contact state"),
         };
-        let bytes = bodies_vtu(model, &u, self.case).map_err(|e| vtk_error(&name, e))?;
-        write_file(&self.dir.join(&name), &bytes)?;
+        write_file(&self.dir.join(&name), &bodies_vtu(model, u, self.compress))?;
         self.entries.push(PvdEntry {
-            time,
+            time: s.time,
             part: 0,
             file: name,
         });
-        if let Some(st) = contact {
+        if let Some(st) = &s.contact {
             let cname = format!("{stem}_contact_{step:04}.vtu");
-            let bytes = contact_vtu(model, st).map_err(|e| vtk_error(&cname, e))?;
-            write_file(&self.dir.join(&cname), &bytes)?;
+            write_file(
+                &self.dir.join(&cname),
+                &contact_vtu(model, st, self.compress),
+            )?;
             self.entries.push(PvdEntry {
-                time,
+                time: s.time,
                 part: 1,
                 file: cname,
             });
@@ -100,7 +117,106 @@ impl<'a> Series<'a> {
             &self.dir.join(format!("{stem}.pvd")),
             pvd(&self.entries).as_bytes(),
         )?;
+        // The state to resume from, after the step's files.
+        if let Some(mut saved) = s.state {
+            saved.pvd = self.entries.clone();
+            write_file(
+                &self.dir.join(restart::state_name(step)),
+                serde_json::to_string(&saved)
+                    .expect("serialisable")
+                    .as_bytes(),
+            )?;
+        }
         self.seconds += t.elapsed().as_secs_f64();
         Ok(())
     }
+}
+
+/// A [`Series`] written on a thread of its own, fed through a channel of depth one: the
+/// driver hands it a step and goes on, and waits only when a step is still queued.
+pub struct Background<'scope> {
+    tx: SyncSender<StepOutput>,
+    /// The writer thread: its busy seconds, or its first error. `None` once joined.
+    handle: Option<ScopedJoinHandle<'scope, Result<f64, RunError>>>,
+    /// Seconds the caller spent waiting for the writer.
+    wait: f64,
+}
+
+impl<'scope> Background<'scope> {
+    /// Starts the writer thread of `series` in `scope`.
+    pub fn spawn<'env>(scope: &'scope Scope<'scope, 'env>, mut series: Series<'env>) -> Self {
+        let (tx, rx): (_, Receiver<StepOutput>) = sync_channel(1);
+        let handle = std::thread::Builder::new()
+            .name("stickslip-writer".into())
+            .spawn_scoped(scope, move || {
+                for step in rx {
+                    // The first error ends the thread (and drops the receiver).
+                    series.write(step)?;
+                }
+                Ok(series.seconds)
+            })
+            .expect("the writer thread starts");
+        Background {
+            tx,
+            handle: Some(handle),
+            wait: 0.0,
+        }
+    }
+
+    /// The writer's error if it has stopped on one (it stops only on an error while steps
+    /// can still come). Each error is returned once.
+    pub fn check(&mut self) -> Result<(), RunError> {
+        if self.handle.as_ref().is_some_and(|h| h.is_finished()) {
+            return Err(self.stopped_error());
+        }
+        Ok(())
+    }
+
+    /// Hands a step to the writer, waiting while the previous one is still queued; the
+    /// writer's error if it has stopped on one (after which the run stops: nothing more is
+    /// sent, and [`Self::finish`] joins nothing).
+    pub fn send(&mut self, step: StepOutput) -> Result<(), RunError> {
+        self.check()?;
+        let t = Instant::now();
+        let sent = self.tx.send(step);
+        self.wait += t.elapsed().as_secs_f64();
+        match sent {
+            Ok(()) => Ok(()),
+            // The receiver is gone: the writer stopped on an error.
+            Err(_) => Err(self.stopped_error()),
+        }
+    }
+
+    /// Waits for the writer to write every step handed to it: (its busy seconds, the seconds
+    /// the caller spent waiting for it), or its error (`Ok` with no busy time if the error was
+    /// already returned by [`Self::check`] or [`Self::send`]).
+    pub fn finish(self) -> Result<(f64, f64), RunError> {
+        let Background { tx, handle, wait } = self;
+        // No more steps: the writer ends once it has written those queued.
+        drop(tx);
+        let Some(h) = handle else {
+            return Ok((0.0, wait));
+        };
+        let t = Instant::now();
+        let busy = join(h)?;
+        Ok((busy, wait + t.elapsed().as_secs_f64()))
+    }
+
+    /// Joins the writer thread, which has stopped early: its error.
+    fn stopped_error(&mut self) -> RunError {
+        let h = self
+            .handle
+            .take()
+            .expect("the writer thread is joined once");
+        match join(h) {
+            Err(e) => e,
+            Ok(_) => unreachable!("the writer stops before it is finished only on an error"),
+        }
+    }
+}
+
+/// Joins a writer thread, passing a panic of it on.
+fn join(h: ScopedJoinHandle<'_, Result<f64, RunError>>) -> Result<f64, RunError> {
+    h.join()
+        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
 }

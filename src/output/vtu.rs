@@ -1,9 +1,13 @@
-//! `.vtu` (VTK XML unstructured grid) datasets through `vtkio`.
+//! `.vtu` (VTK XML unstructured grid) datasets, written directly: an XML header whose data
+//! arrays all have `format="appended"`, then one `<AppendedData encoding="raw">` section with
+//! the arrays' little-endian bytes, each preceded by its byte count (`header_type="UInt64"`).
+//! With compression (`compressor="vtkZLibDataCompressor"`), each array is one zlib block
+//! preceded by the header `[1, n, n, compressed n]` of VTK's block format.
+//!
+//! The arrays: `Float64` points (z = 0) and fields, `UInt64` connectivity and offsets,
+//! `UInt8` cell types (22 quadratic triangle, 21 quadratic edge).
 
-use vtkio::model::{
-    Attribute, Attributes, ByteOrder, CellType, Cells, DataArray, DataSet, ElementType, IOBuffer,
-    UnstructuredGridPiece, Version, VertexNumbers, Vtk,
-};
+use std::fmt::Write as _;
 
 /// A field on points or cells: name, number of components, values (component-fastest).
 pub struct Field {
@@ -38,61 +42,222 @@ pub enum Kind {
     Line3,
 }
 
-/// Serialises an unstructured grid of quadratic cells (points in 2-D, z = 0).
+impl Kind {
+    /// The VTK cell type code.
+    fn code(self) -> u8 {
+        match self {
+            Kind::Tri6 => 22,
+            Kind::Line3 => 21,
+        }
+    }
+}
+
+/// The values of one data array.
+enum Values<'a> {
+    F64(&'a [f64]),
+    U64(&'a [u64]),
+    U8(&'a [u8]),
+}
+
+impl Values<'_> {
+    fn vtk_type(&self) -> &'static str {
+        match self {
+            Values::F64(_) => "Float64",
+            Values::U64(_) => "UInt64",
+            Values::U8(_) => "UInt8",
+        }
+    }
+
+    fn byte_len(&self) -> usize {
+        match self {
+            Values::F64(v) => 8 * v.len(),
+            Values::U64(v) => 8 * v.len(),
+            Values::U8(v) => v.len(),
+        }
+    }
+
+    /// Appends the values' little-endian bytes to `out`.
+    fn put(&self, out: &mut Vec<u8>) {
+        out.reserve(self.byte_len());
+        match self {
+            Values::F64(v) => v
+                .iter()
+                .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+            Values::U64(v) => v
+                .iter()
+                .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+            Values::U8(v) => out.extend_from_slice(v),
+        }
+    }
+}
+
+/// One data array of the XML header.
+struct Array<'a> {
+    name: Option<&'a str>,
+    ncomp: u32,
+    values: Values<'a>,
+}
+
+/// zlib level of compressed output: the fastest, as a run writes many files.
+const ZLIB_LEVEL: u8 = 1;
+
+/// Escapes the characters XML does not allow in an attribute value.
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// The bytes of one compressed array in the appended section: the one-block header
+/// `[1, n, n, compressed n]` (no blocks for no bytes) and the zlib stream.
+fn zlib_block(values: &Values) -> Vec<u8> {
+    let n = values.byte_len();
+    let mut raw = Vec::new();
+    values.put(&mut raw);
+    if n == 0 {
+        // No blocks.
+        return [0u64, 0, 0].iter().flat_map(|h| h.to_le_bytes()).collect();
+    }
+    let z = miniz_oxide::deflate::compress_to_vec_zlib(&raw, ZLIB_LEVEL);
+    let mut out = Vec::with_capacity(32 + z.len());
+    for h in [1, n as u64, n as u64, z.len() as u64] {
+        out.extend_from_slice(&h.to_le_bytes());
+    }
+    out.extend_from_slice(&z);
+    out
+}
+
+/// Serialises an unstructured grid of quadratic cells (points in 2-D, z = 0); `compress`
+/// writes every array as one zlib block.
 pub fn unstructured(
-    title: &str,
     points: &[[f64; 2]],
     cells: &[Vec<usize>],
     kind: Kind,
-    point_data: Vec<Field>,
-    cell_data: Vec<Field>,
-) -> Result<Vec<u8>, vtkio::Error> {
+    point_data: &[Field],
+    cell_data: &[Field],
+    compress: bool,
+) -> Vec<u8> {
     let pts: Vec<f64> = points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect();
     let mut connectivity = Vec::new();
-    let mut offsets = Vec::new();
+    let mut offsets = Vec::with_capacity(cells.len());
     for c in cells {
         connectivity.extend(c.iter().map(|&i| i as u64));
         offsets.push(connectivity.len() as u64);
     }
-    let ct = match kind {
-        Kind::Tri6 => CellType::QuadraticTriangle,
-        Kind::Line3 => CellType::QuadraticEdge,
+    let types = vec![kind.code(); cells.len()];
+    fn field(f: &Field) -> Array<'_> {
+        Array {
+            name: Some(&f.name),
+            ncomp: f.ncomp,
+            values: Values::F64(&f.values),
+        }
+    }
+    // The arrays in the order of the XML header, which is also their order in the appended
+    // section.
+    let point_arrays: Vec<Array> = point_data.iter().map(field).collect();
+    let cell_arrays: Vec<Array> = cell_data.iter().map(field).collect();
+    let points_array = Array {
+        name: None,
+        ncomp: 3,
+        values: Values::F64(&pts),
     };
-    let arr = |f: Field| {
-        Attribute::DataArray(DataArray {
-            name: f.name,
-            elem: if f.ncomp == 3 {
-                ElementType::Vectors
-            } else {
-                ElementType::Scalars {
-                    num_comp: f.ncomp,
-                    lookup_table: None,
-                }
-            },
-            data: IOBuffer::F64(f.values),
-        })
+    let cell_arrays_topology = [
+        Array {
+            name: Some("connectivity"),
+            ncomp: 1,
+            values: Values::U64(&connectivity),
+        },
+        Array {
+            name: Some("offsets"),
+            ncomp: 1,
+            values: Values::U64(&offsets),
+        },
+        Array {
+            name: Some("types"),
+            ncomp: 1,
+            values: Values::U8(&types),
+        },
+    ];
+    let sections: [(&str, &[Array]); 4] = [
+        ("PointData", &point_arrays),
+        ("CellData", &cell_arrays),
+        ("Points", std::slice::from_ref(&points_array)),
+        ("Cells", &cell_arrays_topology),
+    ];
+
+    // Compressed arrays are encoded first (their sizes give the offsets), in parallel; raw
+    // ones are written straight into the file after the header.
+    let encoded: Option<Vec<Vec<u8>>> = compress.then(|| {
+        use rayon::prelude::*;
+        let all: Vec<&Array> = sections.iter().flat_map(|(_, a)| a.iter()).collect();
+        all.par_iter().map(|a| zlib_block(&a.values)).collect()
+    });
+    let sizes: Vec<usize> = match &encoded {
+        Some(e) => e.iter().map(Vec::len).collect(),
+        None => sections
+            .iter()
+            .flat_map(|(_, arrays)| arrays.iter())
+            .map(|a| 8 + a.values.byte_len())
+            .collect(),
     };
-    let vtk = Vtk {
-        version: Version { major: 1, minor: 0 },
-        title: title.into(),
-        byte_order: ByteOrder::LittleEndian,
-        file_path: None,
-        data: DataSet::inline(UnstructuredGridPiece {
-            points: IOBuffer::F64(pts),
-            cells: Cells {
-                cell_verts: VertexNumbers::XML {
-                    connectivity,
-                    offsets,
-                },
-                types: vec![ct; cells.len()],
-            },
-            data: Attributes {
-                point: point_data.into_iter().map(arr).collect(),
-                cell: cell_data.into_iter().map(arr).collect(),
-            },
-        }),
-    };
-    let mut buf = Vec::new();
-    vtk.write_xml(&mut buf)?;
-    Ok(buf)
+
+    let mut xml = String::new();
+    xml += "<?xml version=\"1.0\"?>\n";
+    xml += "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\"";
+    if compress {
+        xml += " compressor=\"vtkZLibDataCompressor\"";
+    }
+    xml += ">\n  <UnstructuredGrid>\n";
+    let _ = writeln!(
+        xml,
+        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
+        points.len(),
+        cells.len()
+    );
+    let (mut k, mut offset) = (0, 0usize);
+    for (section, arrays) in sections {
+        let _ = write!(xml, "      <{section}");
+        if section.ends_with("Data") {
+            // The active scalars and vectors: the first array of one and of three components.
+            let first = |n: u32| arrays.iter().find(|a| a.ncomp == n).and_then(|a| a.name);
+            if let Some(s) = first(1) {
+                let _ = write!(xml, " Scalars=\"{}\"", escape(s));
+            }
+            if let Some(v) = first(3) {
+                let _ = write!(xml, " Vectors=\"{}\"", escape(v));
+            }
+        }
+        xml += ">\n";
+        for a in arrays {
+            let _ = write!(xml, "        <DataArray type=\"{}\"", a.values.vtk_type());
+            if let Some(name) = a.name {
+                let _ = write!(xml, " Name=\"{}\"", escape(name));
+            }
+            let _ = writeln!(
+                xml,
+                " NumberOfComponents=\"{}\" format=\"appended\" offset=\"{offset}\"/>",
+                a.ncomp
+            );
+            offset += sizes[k];
+            k += 1;
+        }
+        let _ = writeln!(xml, "      </{section}>");
+    }
+    xml += "    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n   _";
+    let tail = "\n  </AppendedData>\n</VTKFile>\n";
+
+    let mut out = Vec::with_capacity(xml.len() + offset + tail.len());
+    out.extend_from_slice(xml.as_bytes());
+    match encoded {
+        Some(e) => e.iter().for_each(|b| out.extend_from_slice(b)),
+        None => {
+            for a in sections.iter().flat_map(|(_, arrays)| arrays.iter()) {
+                out.extend_from_slice(&(a.values.byte_len() as u64).to_le_bytes());
+                a.values.put(&mut out);
+            }
+        }
+    }
+    out.extend_from_slice(tail.as_bytes());
+    out
 }

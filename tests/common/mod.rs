@@ -3,6 +3,8 @@
 //! binary on a case with its outputs read back.
 #![allow(dead_code)]
 
+pub mod vtu;
+
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use stickslip::assembly::{self, UpperCsc};
