@@ -379,6 +379,8 @@ fn run_ours(
     let _ = std::fs::remove_dir_all(&out);
     let t = Instant::now();
     let res = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        // Cold builds, timed: no model cache.
+        .env("STICKSLIP_NO_CACHE", "1")
         .args([
             "run",
             path.to_str().unwrap(),

@@ -39,6 +39,8 @@ fn main() {
         for _ in 0..REPEAT {
             let out = tmp.join(format!("out{level}"));
             let st = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+                // Cold builds, timed: no model cache.
+                .env("STICKSLIP_NO_CACHE", "1")
                 .args([
                     "run",
                     case.to_str().unwrap(),

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Compares two trees of run outputs (DIR_A/<case>/..., DIR_B/<case>/...) file by file, byte
 for byte, apart from what measures time: `summary.json` is compared without its timing and
-memory fields and its output directory, `history.csv` and `energy.csv` without the `wall_s`
+memory fields, its output directory and how the model cache served it (`cache`: a hit gives
+the same results as a cold run), `history.csv` and `energy.csv` without the `wall_s`
 column. Prints every file that differs and the count; exits 1 if any does.
 
 Used to check that a restructure leaves the output of the shipped cases unchanged:
@@ -17,7 +18,7 @@ import os
 import sys
 
 TIMING_KEYS = {"timings_s", "contact_solve_s", "peak_memory_mib", "wall_s", "output_dir",
-               "build_s", "sweep_s", "runs", "t_solve", "t_contact"}
+               "build_s", "sweep_s", "runs", "t_solve", "t_contact", "cache"}
 
 
 def strip(d):

@@ -7,6 +7,7 @@
 
 pub mod analytic;
 pub mod assembly;
+pub mod cache;
 pub mod case;
 pub mod checks;
 pub mod condense;

@@ -20,6 +20,8 @@ pub enum FactorError {
     IndexOverflow { n: usize },
     #[error("sparse factorisation: the symbolic analysis is not supernodal")]
     NotSupernodal,
+    #[error("sparse factorisation: {len} factor values given for an analysis with {expected}")]
+    FactorLength { len: usize, expected: usize },
 }
 
 fn sym<'a>(
@@ -41,7 +43,8 @@ fn sym<'a>(
 /// instead of one solve per retained unknown.
 pub struct PartialCholesky {
     symbolic: std::sync::Arc<faer::sparse::linalg::cholesky::SymbolicCholesky<usize>>,
-    values: Vec<f64>,
+    /// The factor's values, shared with a model-cache writer ([`crate::cache`]).
+    values: std::sync::Arc<Vec<f64>>,
     n: usize,
     n_r: usize,
     /// `L_RR`, dense lower triangular, column-major `n_r × n_r`.
@@ -66,7 +69,7 @@ impl PartialSymbolic {
         row_idx: &[usize],
     ) -> Result<PartialSymbolic, FactorError> {
         use faer::dyn_stack::{MemBuffer, MemStack};
-        use faer::sparse::linalg::{SupernodalThreshold, amd, cholesky};
+        use faer::sparse::linalg::amd;
         let other = |e: faer::sparse::FaerError| match e {
             faer::sparse::FaerError::IndexOverflow => FactorError::IndexOverflow { n },
             _ => FactorError::OutOfMemory {
@@ -97,9 +100,31 @@ impl PartialSymbolic {
             )
             .map_err(other)?;
         }
-        for k in n_i..n {
-            fwd[k] = k;
-            inv[k] = k;
+        Self::with_ordering(n, n_r, col_ptr, row_idx, &fwd[..n_i])
+    }
+
+    /// As [`Self::analyse`] with a given ordering of the interior unknowns (`fwd[new] = old`,
+    /// a permutation of `0..n − n_r`), such as [`Self::ordering`] of an earlier analysis.
+    pub fn with_ordering(
+        n: usize,
+        n_r: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        interior: &[usize],
+    ) -> Result<PartialSymbolic, FactorError> {
+        use faer::sparse::linalg::{SupernodalThreshold, cholesky};
+        let other = |e: faer::sparse::FaerError| match e {
+            faer::sparse::FaerError::IndexOverflow => FactorError::IndexOverflow { n },
+            _ => FactorError::OutOfMemory {
+                what: "the symbolic analysis",
+                n,
+            },
+        };
+        let mut fwd = interior.to_vec();
+        fwd.extend(n - n_r..n);
+        let mut inv = vec![0usize; n];
+        for (new, &old) in fwd.iter().enumerate() {
+            inv[old] = new;
         }
         let perm = faer::perm::PermRef::new_checked(&fwd, &inv, n);
         let params = cholesky::CholeskySymbolicParams {
@@ -120,6 +145,12 @@ impl PartialSymbolic {
         })
     }
 
+    /// The ordering of the interior unknowns (`fwd[new] = old`).
+    pub fn ordering(&self) -> Vec<usize> {
+        let perm = self.inner.perm().expect("custom ordering");
+        perm.arrays().0[..self.n - self.n_r].to_vec()
+    }
+
     /// Numeric factorisation with these values, and extraction of `L_RR`.
     pub fn factorise(
         &self,
@@ -128,9 +159,7 @@ impl PartialSymbolic {
         values: &[f64],
     ) -> Result<PartialCholesky, FactorError> {
         use faer::dyn_stack::{MemBuffer, MemStack};
-        use faer::sparse::linalg::cholesky::{SymbolicCholeskyRaw, supernodal::SupernodalLltRef};
-        let (n, n_r) = (self.n, self.n_r);
-        let n_i = n - n_r;
+        let n = self.n;
         let a = SparseColMatRef::new(sym(n, col_ptr, row_idx), &values[..col_ptr[n]]);
         let par = faer::get_global_parallelism();
         let mut l = vec![0.0; self.inner.len_val()];
@@ -157,6 +186,21 @@ impl PartialSymbolic {
                     FactorError::NotPositiveDefinite { pivot: index, n }
                 }
             })?;
+        self.from_values(std::sync::Arc::new(l))
+    }
+
+    /// The factorisation with the values of an earlier numeric factorisation on this
+    /// analysis ([`PartialCholesky::values`]), and extraction of `L_RR`.
+    pub fn from_values(&self, l: std::sync::Arc<Vec<f64>>) -> Result<PartialCholesky, FactorError> {
+        use faer::sparse::linalg::cholesky::{SymbolicCholeskyRaw, supernodal::SupernodalLltRef};
+        let (n, n_r) = (self.n, self.n_r);
+        let n_i = n - n_r;
+        if l.len() != self.inner.len_val() {
+            return Err(FactorError::FactorLength {
+                len: l.len(),
+                expected: self.inner.len_val(),
+            });
+        }
         let mut l_rr = faer::Mat::<f64>::zeros(n_r, n_r);
         if n_r > 0 {
             let SymbolicCholeskyRaw::Supernodal(sn) = self.inner.raw() else {
@@ -201,6 +245,11 @@ impl PartialCholesky {
 
     pub fn n_retained(&self) -> usize {
         self.n_r
+    }
+
+    /// The values of the factor (shared, not copied).
+    pub fn values(&self) -> std::sync::Arc<Vec<f64>> {
+        self.values.clone()
     }
 
     /// `L_RR` (dense, lower triangular): `S = L_RR L_RRᵀ`.
@@ -249,7 +298,8 @@ pub struct SaddleSymbolic {
 /// A numeric `L D Lᵀ` factorisation of a saddle-point matrix (see [`SaddleSymbolic`]).
 pub struct SaddleFactor {
     symbolic: std::sync::Arc<faer::sparse::linalg::cholesky::SymbolicCholesky<usize>>,
-    values: Vec<f64>,
+    /// The factor's values, shared with a model-cache writer ([`crate::cache`]).
+    values: std::sync::Arc<Vec<f64>>,
     n: usize,
     m: usize,
 }
@@ -318,6 +368,19 @@ impl SaddleSymbolic {
         row_idx: &[usize],
         y_rows: &[Vec<(usize, f64)>],
     ) -> Result<SaddleSymbolic, FactorError> {
+        let fwd = order_leading(n, col_ptr, row_idx, n + y_rows.len())?;
+        Self::with_ordering(n, col_ptr, row_idx, y_rows, &fwd)
+    }
+
+    /// As [`Self::analyse`] with a given ordering of the free DOFs (`fwd[new] = old`, a
+    /// permutation of `0..n`), such as [`Self::ordering`] of an earlier analysis.
+    pub fn with_ordering(
+        n: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        y_rows: &[Vec<(usize, f64)>],
+        ordering: &[usize],
+    ) -> Result<SaddleSymbolic, FactorError> {
         use faer::sparse::linalg::{SupernodalThreshold, cholesky};
         let m = y_rows.len();
         let size = n + m;
@@ -331,7 +394,7 @@ impl SaddleSymbolic {
             ri.push(cp.len() - 1); // the (zero) diagonal of the constraint column
             cp.push(ri.len());
         }
-        let mut fwd = order_leading(n, col_ptr, row_idx, size)?;
+        let mut fwd = ordering.to_vec();
         fwd.extend(n..size);
         let mut inv = vec![0usize; size];
         for (new, &old) in fwd.iter().enumerate() {
@@ -363,6 +426,12 @@ impl SaddleSymbolic {
             n,
             m,
         })
+    }
+
+    /// The ordering of the free DOFs (`fwd[new] = old`; the constraint rows follow in order).
+    pub fn ordering(&self) -> Vec<usize> {
+        let perm = self.inner.perm().expect("custom ordering");
+        perm.arrays().0[..self.n].to_vec()
     }
 
     /// Number of nonzeros of the factor `L` (supernodal storage).
@@ -444,12 +513,7 @@ impl SaddleSymbolic {
                     FactorError::NotPositiveDefinite { pivot: index, n }
                 }
             })?;
-        let f = SaddleFactor {
-            symbolic: self.inner.clone(),
-            values: l,
-            n,
-            m,
-        };
+        let f = self.from_values(std::sync::Arc::new(l))?;
         // K̂ must be positive definite: every pivot of its block positive (a body that nothing
         // holds gives a vanishing or negative one).
         let sn = supernodal(&f.symbolic)?;
@@ -472,11 +536,33 @@ impl SaddleSymbolic {
         }
         Ok(f)
     }
+
+    /// The factorisation with the values of an earlier numeric factorisation on this analysis
+    /// ([`SaddleFactor::values`]).
+    pub fn from_values(&self, l: std::sync::Arc<Vec<f64>>) -> Result<SaddleFactor, FactorError> {
+        if l.len() != self.inner.len_val() {
+            return Err(FactorError::FactorLength {
+                len: l.len(),
+                expected: self.inner.len_val(),
+            });
+        }
+        Ok(SaddleFactor {
+            symbolic: self.inner.clone(),
+            values: l,
+            n: self.n,
+            m: self.m,
+        })
+    }
 }
 
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 
 impl SaddleFactor {
+    /// The values of the factor (shared, not copied).
+    pub fn values(&self) -> std::sync::Arc<Vec<f64>> {
+        self.values.clone()
+    }
+
     /// Order of `K̂`.
     pub fn n(&self) -> usize {
         self.n

@@ -38,6 +38,15 @@ enum Cmd {
         /// a directory (its latest state). The case file must be the one that wrote it.
         #[arg(long)]
         resume: Option<PathBuf>,
+        /// Keep the model's linear algebra (ordering, factor, Delassus operator) in this
+        /// directory and reuse it when the same mesh, bodies, supports, pilot and contact pair
+        /// come again (default: $STICKSLIP_CACHE_DIR, else $XDG_CACHE_HOME/stickslip, else
+        /// ~/.cache/stickslip; size cap $STICKSLIP_CACHE_MAX, default 4G).
+        #[arg(long, value_name = "DIR", conflicts_with = "no_cache")]
+        cache: Option<PathBuf>,
+        /// Neither read nor write the model cache (also STICKSLIP_NO_CACHE=1).
+        #[arg(long)]
+        no_cache: bool,
     },
     /// Run one case against many friction laws and/or loads on one shared model, in parallel,
     /// and write one table (CSV and JSON).
@@ -64,6 +73,15 @@ enum Cmd {
         /// Discard this shard's existing part instead of resuming it.
         #[arg(long)]
         fresh: bool,
+        /// Keep the model's linear algebra (ordering, factor, Delassus operator) in this
+        /// directory and reuse it when the same mesh, bodies, supports, pilot and contact pair
+        /// come again (default: $STICKSLIP_CACHE_DIR, else $XDG_CACHE_HOME/stickslip, else
+        /// ~/.cache/stickslip; size cap $STICKSLIP_CACHE_MAX, default 4G).
+        #[arg(long, value_name = "DIR", conflicts_with = "no_cache")]
+        cache: Option<PathBuf>,
+        /// Neither read nor write the model cache (also STICKSLIP_NO_CACHE=1).
+        #[arg(long)]
+        no_cache: bool,
     },
     /// Merge the parts of a sharded sweep (part_K_of_N.jsonl in each DIR) into sweep.csv and
     /// sweep.json; refuses parts of different sweeps and reports rows no part holds.
@@ -84,6 +102,15 @@ enum Cmd {
         /// The mesh file (gmsh MSH 4.1).
         mesh: PathBuf,
     },
+}
+
+/// The model cache asked for on the command line.
+fn cache_choice(dir: Option<PathBuf>, off: bool) -> stickslip::cache::Choice {
+    match (dir, off) {
+        (_, true) => stickslip::cache::Choice::Off,
+        (Some(d), false) => stickslip::cache::Choice::Dir(d),
+        (None, false) => stickslip::cache::Choice::Default,
+    }
 }
 
 /// Sets up the thread pools of rayon and faer (`None`: all cores); refuses `Some(0)`.
@@ -114,6 +141,8 @@ fn main() -> ExitCode {
             quiet,
             log,
             resume,
+            cache,
+            no_cache,
         } => {
             if let Err(e) = set_threads(threads) {
                 eprintln!("error: {e}");
@@ -124,6 +153,7 @@ fn main() -> ExitCode {
                 quiet,
                 log,
                 resume,
+                cache: cache_choice(cache, no_cache),
             };
             match stickslip::run::run(&case, &opts) {
                 Ok(_) => ExitCode::SUCCESS,
@@ -145,6 +175,8 @@ fn main() -> ExitCode {
             quiet,
             shard,
             fresh,
+            cache,
+            no_cache,
         } => {
             if let Err(e) = set_threads(threads) {
                 eprintln!("error: {e}");
@@ -160,6 +192,7 @@ fn main() -> ExitCode {
                         quiet,
                         shard,
                         fresh,
+                        cache: cache_choice(cache, no_cache),
                     };
                     stickslip::sweep::run(&case, &sweep, &opts)
                 });

@@ -103,6 +103,10 @@ pub struct Summary {
     /// The energy balance, when the run keeps it (see [`crate::case::Output::energy`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub energy: Option<crate::energy::EnergySummary>,
+    /// How the model cache served the run: `hit`, `miss` (built and written), `rebuilt` (an
+    /// unusable entry replaced) or `off`, with the entry's path and size.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cache: Option<crate::cache::Report>,
 }
 
 /// The self-checks of the last converged step (none when no step converged).
@@ -429,7 +433,7 @@ pub fn summarise(
         dofs_retained: model.dofs.n_retained,
         contact_nodes: model.contact.as_ref().map_or(0, |c| c.system.ns),
         candidate_gap: model.contact.as_ref().map(|c| c.pair.candidate_gap),
-        stiffness_nonzeros_upper: model.k.row_idx.len(),
+        stiffness_nonzeros_upper: model.stiffness_nonzeros,
         threads: rayon::current_num_threads(),
         timings_s: model.timings.clone(),
         contact_solve_s,
@@ -443,6 +447,7 @@ pub fn summarise(
         output_dir: out_dir.display().to_string(),
         status,
         energy: None,
+        cache: model.cache.clone(),
     };
     (summary, failure, lost_equilibrium)
 }

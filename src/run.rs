@@ -26,6 +26,8 @@ pub struct RunOptions {
     pub log: LogLevel,
     /// Resume from a saved state (a `state_NNNN.json`, or a directory: its latest state).
     pub resume: Option<PathBuf>,
+    /// The model cache (`--cache DIR`, `--no-cache`; see [`crate::cache`]).
+    pub cache: crate::cache::Choice,
 }
 
 impl RunOptions {
@@ -62,8 +64,12 @@ pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
         .map(|p| restart::load(p, &case, case_path))
         .transpose()?;
     let (mut gap, doublings) = (resume.as_ref().and_then(|s| s.candidate_gap), 8);
+    let store = crate::cache::Store::resolve(&opts.cache, opts.level() >= LogLevel::Warn);
     for _ in 0..doublings {
-        let model = Model::build_with_gap(&case, case_path, gap)?;
+        let mut model = Model::build_cached(&case, case_path, gap, store.as_ref().ok())?;
+        if let Err(off) = &store {
+            model.cache = Some(off.clone());
+        }
         let resumed = resume.is_some();
         match run_model(&case, case_path, model, &out_dir, opts, resume.take()) {
             Err(RunError::ZoneClipped { gap: g, step }) if resumed => {

@@ -481,6 +481,8 @@ fn a_closed_output_pipe_ends_quietly() {
         vec!["analytic", "jkr-curve", "--psi", "0.1", "--n", "200000"],
     ] {
         let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+            // No model cache: tests leave the user's cache directory alone.
+            .env("STICKSLIP_NO_CACHE", "1")
             .args(&args)
             .current_dir(common::repo())
             .stdout(std::process::Stdio::piped())

@@ -695,6 +695,8 @@ struct Outcome {
 
 fn run_with_timeout(dir: &Path, args: &[String], timeout: Duration) -> Outcome {
     let mut child = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        // No model cache: tests leave the user's cache directory alone.
+        .env("STICKSLIP_NO_CACHE", "1")
         .args(args)
         .current_dir(dir)
         .stdin(Stdio::null())

@@ -419,15 +419,18 @@ fn run_scene(s: &Scene, root: &Path) -> Outcome {
     let out = dir.join("out");
     let t = Instant::now();
     let (code, _, stderr) = run_with_timeout(
-        Command::new(env!("CARGO_BIN_EXE_stickslip")).args([
-            "run",
-            path.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-            "--threads",
-            "1",
-        ]),
+        Command::new(env!("CARGO_BIN_EXE_stickslip"))
+            // No model cache: tests leave the user's cache directory alone.
+            .env("STICKSLIP_NO_CACHE", "1")
+            .args([
+                "run",
+                path.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "--quiet",
+                "--threads",
+                "1",
+            ]),
         RUN_TIMEOUT,
     );
     let wall_run = t.elapsed().as_secs_f64();
@@ -469,15 +472,18 @@ fn run_scene(s: &Scene, root: &Path) -> Outcome {
             std::fs::write(&p, serde_json::to_string_pretty(&v).unwrap()).unwrap();
             let n_out = dir.join("out_normal");
             let (code, _, err) = run_with_timeout(
-                Command::new(env!("CARGO_BIN_EXE_stickslip")).args([
-                    "run",
-                    p.to_str().unwrap(),
-                    "--out",
-                    n_out.to_str().unwrap(),
-                    "--quiet",
-                    "--threads",
-                    "1",
-                ]),
+                Command::new(env!("CARGO_BIN_EXE_stickslip"))
+                    // No model cache: tests leave the user's cache directory alone.
+                    .env("STICKSLIP_NO_CACHE", "1")
+                    .args([
+                        "run",
+                        p.to_str().unwrap(),
+                        "--out",
+                        n_out.to_str().unwrap(),
+                        "--quiet",
+                        "--threads",
+                        "1",
+                    ]),
                 RUN_TIMEOUT,
             );
             assert_eq!(code, 0, "scene {}: normal stage alone: {err}", s.id);

@@ -127,6 +127,8 @@ fn three_shards_killed_resumed_and_merged_equal_the_unsharded_sweep() {
     let sh = s.dir.join("sharded");
     // Shard 0 runs whole, numbered by Slurm's array task id.
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        // No model cache: tests leave the user's cache directory alone.
+        .env("STICKSLIP_NO_CACHE", "1")
         .args(["sweep", s.case.to_str().unwrap(), s.sweep.to_str().unwrap()])
         .args([
             "--out",
@@ -150,6 +152,8 @@ fn three_shards_killed_resumed_and_merged_equal_the_unsharded_sweep() {
     // Shard 1 is killed once its part holds a row or two, then started again.
     let part1 = sh.join("part_1_of_3.jsonl");
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        // No model cache: tests leave the user's cache directory alone.
+        .env("STICKSLIP_NO_CACHE", "1")
         .args([
             "sweep",
             s.case.to_str().unwrap(),
@@ -225,6 +229,8 @@ fn bad_shards_and_merges_are_refused_and_write_nothing() {
         let (code, _, err) = if spec.starts_with("slurm") {
             // Outside a job array the variable is absent.
             let o = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+                // No model cache: tests leave the user's cache directory alone.
+                .env("STICKSLIP_NO_CACHE", "1")
                 .args(["sweep", s.case.to_str().unwrap(), s.sweep.to_str().unwrap()])
                 .args(["--out", out.to_str().unwrap(), "--shard", spec])
                 .env_remove("SLURM_ARRAY_TASK_ID")

@@ -26,6 +26,8 @@ fn run_timed(
     ]);
     let t = std::time::Instant::now();
     let st = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        // Cold builds, timed: no model cache.
+        .env("STICKSLIP_NO_CACHE", "1")
         .args(&args)
         .status()
         .expect("the stickslip binary runs");
@@ -71,6 +73,8 @@ pub fn run_sweep(
 /// `stickslip analytic ARGS…`: its standard output (panics if the command fails).
 pub fn analytic(args: &[&str]) -> String {
     let out = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        // Cold builds, timed: no model cache.
+        .env("STICKSLIP_NO_CACHE", "1")
         .arg("analytic")
         .args(args)
         .output()

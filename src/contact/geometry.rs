@@ -108,6 +108,9 @@ fn point_gap(
     let mut best: Option<f64> = None;
     for e in master {
         let xm = e.map(|k| mesh.nodes[k]);
+        if !within_reach(&xm, x, reach) {
+            continue;
+        }
         if let Some((r, g)) = mortar::project_along(&xm, x, n)
             && (-1.0 - 1e-9..=1.0 + 1e-9).contains(&r)
             && g.abs() <= reach
@@ -117,6 +120,28 @@ fn point_gap(
         }
     }
     best
+}
+
+/// Whether a master edge may hold a hit within `reach` of `x`: the distance from `x` to the
+/// bounding box of the edge's Bézier control points (which contains the curve) is at most
+/// `reach`, with a margin far above the round-off of [`mortar::project_along`]. Edges that fail
+/// cannot give an accepted hit in [`point_gap`]; skipping them saves the projections, which
+/// otherwise take most of the time of building a pair on a fine mesh.
+fn within_reach(xm: &[[f64; 2]; 3], x: [f64; 2], reach: f64) -> bool {
+    let c = [
+        2.0 * xm[2][0] - 0.5 * (xm[0][0] + xm[1][0]),
+        2.0 * xm[2][1] - 0.5 * (xm[0][1] + xm[1][1]),
+    ];
+    let mut d2 = 0.0;
+    let mut scale = reach + x[0].abs() + x[1].abs();
+    for i in 0..2 {
+        let lo = xm[0][i].min(xm[1][i]).min(c[i]);
+        let hi = xm[0][i].max(xm[1][i]).max(c[i]);
+        let d = (lo - x[i]).max(x[i] - hi).max(0.0);
+        d2 += d * d;
+        scale += hi - lo;
+    }
+    d2.sqrt() <= reach + 1e-6 * scale
 }
 
 /// Chooses the candidate zone (slave edges with a node whose initial gap is at most

@@ -88,13 +88,26 @@ impl ContactModel {
         cond: &crate::condense::Condensed,
         e_star: f64,
     ) -> ContactModel {
-        let m0 = &pair.mortar;
-        let ns = m0.slave_nodes.len();
         let w = match &cond.chol {
             crate::condense::Factor::Saddle(f) => f.delassus(),
             crate::condense::Factor::Partial(_) => None,
         }
         .unwrap_or_else(|| delassus_by_solves(&y.rows, cond));
+        Self::with_w(pair, y, has_pilot, cond, e_star, w)
+    }
+
+    /// As [`ContactModel::new`] with the Delassus operator `w` of an earlier build of the same
+    /// model (the model cache, [`crate::cache`]).
+    pub fn with_w(
+        pair: Pair,
+        y: ConstraintRows,
+        has_pilot: bool,
+        cond: &crate::condense::Condensed,
+        e_star: f64,
+        w: faer::Mat<f64>,
+    ) -> ContactModel {
+        let m0 = &pair.mortar;
+        let ns = m0.slave_nodes.len();
         let kg: Vec<f64> = cond.grounding.iter().map(|g| g.1).collect();
         let eps_unit = (0..ns).map(|j| e_star * m0.weight[j] / m0.h[j]).collect();
         // Orientation of the mean slip: its response to a pilot force in +x.

@@ -1,6 +1,7 @@
 //! A model ready to solve: the checked mesh, the DOF numbering, the assembled and factorised
 //! stiffness, the condensed system on the retained DOFs and the load vectors.
 
+mod cached;
 pub mod step;
 pub use step::StepLoad;
 
@@ -59,6 +60,9 @@ pub struct Timings {
     /// Time the run spent waiting for the output writer (a step still queued, and the last
     /// steps at the end): the part of `write` that adds to the wall time.
     pub write_wait: f64,
+    /// The model cache: the key (a hash of the mesh file and the case's parts it depends on),
+    /// and on a hit reading and checking the entry (apart from the analysis that overlaps it).
+    pub cache: f64,
 }
 
 /// The assembled model.
@@ -69,7 +73,9 @@ pub struct Model {
     /// Body index (into the case's `bodies`) of each active triangle.
     pub elem_body: Vec<usize>,
     pub dofs: DofMap,
-    pub k: UpperCsc,
+    /// Nonzeros of the upper triangle of the assembled stiffness (`K` itself is not kept: it
+    /// is factorised, and a model from the cache is not assembled at all).
+    pub stiffness_nonzeros: usize,
     /// Factorised stiffness and condensed system on the retained DOFs.
     pub condensed: Condensed,
     /// Nodal forces of the tractions at scale 1 (free DOFs).
@@ -90,6 +96,12 @@ pub struct Model {
     /// (body index, direction).
     pub pilot_separation: Option<(usize, [f64; 2])>,
     pub timings: Timings,
+    /// How the model cache served this model (`None`: built without one, as by [`Model::build`]).
+    pub cache: Option<crate::cache::Report>,
+    /// The cache entry being written in the background: held for its `Drop`, which waits for
+    /// the write when the model is dropped.
+    #[allow(dead_code)]
+    cache_job: Option<crate::cache::Job>,
 }
 
 impl Model {
@@ -104,19 +116,56 @@ impl Model {
         case_path: &std::path::Path,
         gap: Option<f64>,
     ) -> Result<Model, ModelError> {
+        Self::build_cached(case, case_path, gap, None)
+    }
+
+    /// As [`Model::build_with_gap`], with the model cache `store` (see [`crate::cache`]): its
+    /// linear algebra (ordering, factor, Delassus operator, condensed loads of the prescribed
+    /// displacements) is loaded when an entry of the same key is there, else built and written
+    /// to it in the background. The result is the same, bit for bit.
+    pub fn build_cached(
+        case: &Case,
+        case_path: &std::path::Path,
+        gap: Option<f64>,
+        store: Option<&crate::cache::Store>,
+    ) -> Result<Model, ModelError> {
         let t0 = Instant::now();
-        let mesh = crate::mesh::gmsh::read(&case.mesh_path(case_path))?;
+        let path = case.mesh_path(case_path);
+        let bytes = std::fs::read(&path).map_err(|source| {
+            ModelError::MeshRead(crate::mesh::gmsh::MeshReadError::Io {
+                path: path.display().to_string(),
+                source,
+            })
+        })?;
+        let mesh = crate::mesh::gmsh::parse(&bytes, &path)?;
         let mut timings = Timings {
             read: t0.elapsed().as_secs_f64(),
             ..Default::default()
         };
-        Self::from_mesh(case, mesh, &mut timings, gap)
+        Self::build_on(
+            case,
+            mesh,
+            store.map(|s| (s, &bytes[..])),
+            &mut timings,
+            gap,
+        )
     }
 
     /// Builds the model on an already read mesh (`gap` overrides the contact candidate gap).
     pub fn from_mesh(
         case: &Case,
         mesh: Mesh,
+        timings: &mut Timings,
+        gap: Option<f64>,
+    ) -> Result<Model, ModelError> {
+        Self::build_on(case, mesh, None, timings, gap)
+    }
+
+    /// [`Model::from_mesh`] with the model cache and the bytes of the mesh file, if any.
+    fn build_on(
+        case: &Case,
+        mesh: Mesh,
+        cache: Option<(&crate::cache::Store, &[u8])>,
         timings: &mut Timings,
         gap: Option<f64>,
     ) -> Result<Model, ModelError> {
@@ -154,12 +203,6 @@ impl Model {
             .as_ref()
             .zip(pair.as_ref())
             .and_then(|(pn, p)| pilot_separation(&mesh, &elems, &elem_body, pn, p, &dofs));
-        let t = Instant::now();
-        let mut k = UpperCsc::pattern(&mesh, &elems, &dofs);
-        let f_prescribed = assembly::assemble_stiffness(&mesh, &elems, &dofs, &mut k);
-        let f_traction = traction_forces(case, &mesh, &orient, &dofs);
-        timings.assemble = t.elapsed().as_secs_f64();
-
         // The pilot's DOFs are grounded: the body it drives may be held by nothing else.
         let mut grounded: Vec<usize> = dofs
             .pilot
@@ -175,7 +218,84 @@ impl Model {
                 &retained,
             ));
         }
-        let (condensed, contact) = factorise(&k, &dofs, &grounded, pair, e_star, timings)?;
+        let y = pair
+            .as_ref()
+            .map(|p| crate::contact::ConstraintRows::new(p, &dofs, &grounded));
+        let t = Instant::now();
+        let f_traction = traction_forces(case, &mesh, &orient, &dofs);
+        let t_traction = t.elapsed().as_secs_f64();
+
+        // The model cache: the linear algebra of an earlier build of the same model, if any.
+        let sizes = cached::Sizes {
+            contact: pair.is_some(),
+            n_free: dofs.n_free(),
+            n_interior: dofs.n_interior,
+            n_retained: dofs.n_retained,
+            m: y.as_ref().map_or(0, |y| y.rows.len()),
+        };
+        let t = Instant::now();
+        let mut lookup = cached::Lookup::None;
+        if let Some((store, bytes)) = cache {
+            lookup = cached::lookup(
+                store,
+                case,
+                bytes,
+                pair.as_ref().map(|p| p.candidate_gap),
+                &sizes,
+                y.as_ref(),
+                &grounded,
+            );
+        }
+        let analyse_s = match &lookup {
+            cached::Lookup::Hit(r) => r.analyse_s,
+            _ => 0.0,
+        };
+        timings.cache = t.elapsed().as_secs_f64() - analyse_s;
+        let mut cache_report = lookup.report();
+
+        let (condensed, contact, f_prescribed, stiffness_nonzeros, w0_cached, pending) =
+            match lookup {
+                cached::Lookup::Hit(r) => {
+                    let r = *r;
+                    timings.assemble = t_traction;
+                    timings.analyse = r.analyse_s;
+                    let t = Instant::now();
+                    let w = r.w;
+                    let contact = pair.zip(y).map(|(p, y)| {
+                        crate::contact::ContactModel::with_w(
+                            p,
+                            y,
+                            dofs.pilot.is_some(),
+                            &r.condensed,
+                            e_star.expect("with pair"),
+                            w.expect("a contact model's entry holds W"),
+                        )
+                    });
+                    timings.condense = t.elapsed().as_secs_f64();
+                    (
+                        r.condensed,
+                        contact,
+                        r.f_prescribed,
+                        r.stiffness_nonzeros,
+                        r.w0,
+                        None,
+                    )
+                }
+                other => {
+                    let t = Instant::now();
+                    let mut k = UpperCsc::pattern(&mesh, &elems, &dofs);
+                    let f_prescribed = assembly::assemble_stiffness(&mesh, &elems, &dofs, &mut k);
+                    timings.assemble = t.elapsed().as_secs_f64() + t_traction;
+                    let (condensed, contact, ordering) =
+                        factorise(&k, &dofs, &grounded, pair.zip(y), e_star, timings)?;
+                    let nnz = k.row_idx.len();
+                    let pending = match other {
+                        cached::Lookup::Miss(p) => Some((p, ordering, k)),
+                        _ => None,
+                    };
+                    (condensed, contact, f_prescribed, nnz, None, pending)
+                }
+            };
         let contact = contact.map(|mut c| {
             c.system.floating_pilot = pilot_separation.is_some();
             c
@@ -191,19 +311,51 @@ impl Model {
             _ => None,
         };
         let contact_w0 = match &contact {
-            Some(c) => [
-                c.w0(&condensed, &f_traction),
-                c.w0(&condensed, &f_prescribed),
-            ],
+            Some(c) => {
+                let (traction, prescribed) = match w0_cached {
+                    Some((ft, w0t, w0p)) => (
+                        cached::same_bits(&ft, &f_traction).then_some(w0t),
+                        Some(w0p),
+                    ),
+                    None => (None, None),
+                };
+                [
+                    traction.unwrap_or_else(|| c.w0(&condensed, &f_traction)),
+                    prescribed.unwrap_or_else(|| c.w0(&condensed, &f_prescribed)),
+                ]
+            }
             None => [Vec::new(), Vec::new()],
         };
         timings.condense += t.elapsed().as_secs_f64();
+
+        // A miss: write the entry while the run goes on.
+        let cache_job = match (cache, pending) {
+            (Some((store, _)), Some((p, ordering, k))) => {
+                let t = Instant::now();
+                let entry = cached::entry(cached::Built {
+                    sizes: &sizes,
+                    ordering,
+                    k,
+                    grounded: &grounded,
+                    condensed: &condensed,
+                    w: contact.as_ref().map(|c| &c.system.w),
+                    f_prescribed: &f_prescribed,
+                    f_traction: &f_traction,
+                    contact_w0: &contact_w0,
+                });
+                let (report, job) = store.write_in_background(p.key, entry, p.status, p.note);
+                timings.cache += t.elapsed().as_secs_f64();
+                cache_report = Some(report);
+                job
+            }
+            _ => None,
+        };
         Ok(Model {
             mesh,
             elems,
             elem_body,
             dofs,
-            k,
+            stiffness_nonzeros,
             condensed,
             f_traction,
             f_prescribed,
@@ -213,6 +365,8 @@ impl Model {
             contact_w0,
             pilot_separation,
             timings: timings.clone(),
+            cache: cache_report,
+            cache_job,
         })
     }
 
@@ -254,17 +408,19 @@ impl Model {
 /// builds the contact model of `pair` on it: without contact, a partial factorisation with the
 /// retained (pilot) DOFs last; with contact, the saddle-point matrix with the contact
 /// constraint rows, whose trailing block gives the Delassus operator. Records the `analyse`,
-/// `factorise` and `condense` (the Delassus operator) timings.
+/// `factorise` and `condense` (the Delassus operator) timings. Also returns the ordering of the
+/// analysis (for the model cache).
+#[allow(clippy::type_complexity)]
 fn factorise(
     k: &UpperCsc,
     dofs: &DofMap,
     grounded: &[usize],
-    pair: Option<crate::contact::Pair>,
+    pair: Option<(crate::contact::Pair, crate::contact::ConstraintRows)>,
     e_star: Option<f64>,
     timings: &mut Timings,
-) -> Result<(Condensed, Option<crate::contact::ContactModel>), ModelError> {
+) -> Result<(Condensed, Option<crate::contact::ContactModel>, Vec<usize>), ModelError> {
     let n_i = dofs.n_interior;
-    let Some(pair) = pair else {
+    let Some((pair, y)) = pair else {
         let t = Instant::now();
         let symbolic =
             PartialSymbolic::analyse(dofs.n_free(), dofs.n_retained, &k.col_ptr, &k.row_idx)?;
@@ -272,9 +428,8 @@ fn factorise(
         let t = Instant::now();
         let condensed = Condensed::build(k, n_i, grounded, &symbolic)?;
         timings.factorise = t.elapsed().as_secs_f64();
-        return Ok((condensed, None));
+        return Ok((condensed, None, symbolic.ordering()));
     };
-    let y = crate::contact::ConstraintRows::new(&pair, dofs, grounded);
     let y_free = y.free(n_i);
     let t = Instant::now();
     let symbolic = SaddleSymbolic::analyse(dofs.n_free(), &k.col_ptr, &k.row_idx, &y_free)?;
@@ -291,7 +446,7 @@ fn factorise(
         e_star.expect("with pair"),
     );
     timings.condense = t.elapsed().as_secs_f64();
-    Ok((condensed, Some(contact)))
+    Ok((condensed, Some(contact), symbolic.ordering()))
 }
 
 /// The curve groups the case names: supports, tractions, the pilot, then the contact pair

@@ -32,6 +32,8 @@ pub struct SweepOptions {
     pub shard: Option<(usize, usize)>,
     /// Discard this shard's part if it exists instead of resuming it.
     pub fresh: bool,
+    /// The model cache (`--cache DIR`, `--no-cache`; see [`crate::cache`]).
+    pub cache: crate::cache::Choice,
 }
 
 /// Parses `K/N` (or `slurm/N`: K from `SLURM_ARRAY_TASK_ID`) into a shard, `0 ≤ K < N`.
@@ -129,7 +131,8 @@ pub fn run(case_path: &Path, sweep_path: &Path, opts: &SweepOptions) -> Result<(
     // A part of another sweep is refused before the model is built.
     let existing = parts::PartWriter::existing(&part_path, &header, opts.fresh)?;
     let t = Instant::now();
-    let model = Model::build(&case, case_path)?;
+    let store = crate::cache::Store::resolve(&opts.cache, !opts.quiet);
+    let model = Model::build_cached(&case, case_path, None, store.as_ref().ok())?;
     let e_star = model.contact.as_ref().map(|c| c.e_star).expect("contact");
     let mut laws = rows
         .laws

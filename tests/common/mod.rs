@@ -32,6 +32,8 @@ pub fn tempdir(name: &str) -> PathBuf {
 /// stderr).
 pub fn stickslip(args: &[&str]) -> (i32, String, String) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        // No model cache: tests leave the user's cache directory alone.
+        .env("STICKSLIP_NO_CACHE", "1")
         .args(args)
         .output()
         .unwrap();

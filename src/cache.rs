@@ -1,0 +1,962 @@
+//! The on-disk model cache: the linear algebra of a model (the ordering, the numeric factor,
+//! the Delassus operator `W`, the condensed loads of the prescribed displacements, …) kept in
+//! a file named by a hash of everything it depends on, so that a second run of the same mesh,
+//! materials, supports, pilot and contact pair skips the analysis, the factorisation and the
+//! condensation. What goes into the key is in [`model_key`]; what goes into an entry, and how
+//! it is used, in [`crate::model`] (`cached.rs`).
+//!
+//! # File format (version [`FORMAT`])
+//!
+//! Little-endian throughout; every section is a sequence of 8-byte words.
+//! ```text
+//!   magic "stkslpMC" (8 bytes) | format u32 | sections u32 | key (2 × u64)
+//!   per section: tag u32 | kind u32 (1 integer, 2 float) | words u64 | XXH64 of its bytes u64
+//!   XXH64 of all the header bytes above (u64)
+//!   the sections' words, in the order of the table
+//! ```
+//! The header hash covers the section hashes, so it checks the whole file. A file that is
+//! shorter or longer than its table says, whose magic, format, key or any hash does not match,
+//! is reported, deleted and rebuilt, never used. Entries are written to a temporary name and
+//! renamed into place (no `fsync`: after a crash a file may be incomplete, which the checks
+//! catch).
+//!
+//! # Place and size
+//!
+//! `--cache DIR`, else `$STICKSLIP_CACHE_DIR`, else `$XDG_CACHE_HOME/stickslip`, else
+//! `$HOME/.cache/stickslip`; `--no-cache` (or `STICKSLIP_NO_CACHE=1`) bypasses it. The
+//! directory is kept under `$STICKSLIP_CACHE_MAX` bytes (suffixes K, M, G, T, binary; default
+//! 4 GiB) by deleting the least recently used entries (a hit touches its file's modification
+//! time) before a new one is written; an entry larger than the cap is not written.
+
+use crate::case::Case;
+use std::io::{Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Version of the file format and of the meaning of the sections. Bump it when either changes.
+pub const FORMAT: u32 = 1;
+const MAGIC: [u8; 8] = *b"stkslpMC";
+/// The fill-reducing ordering the factorisations use (part of the key: a cache written with
+/// another ordering must not be used). Change it with the ordering in [`crate::linsolve`].
+pub const ORDERING: &str = "amd";
+/// Default size cap of the cache directory.
+pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
+/// At most this many sections in a file (a larger count is a corrupt header).
+const MAX_SECTIONS: usize = 64;
+/// Bytes read or written per chunk.
+const CHUNK: usize = 1 << 20;
+
+// ------------------------------------------------------------------------------------------
+// XXH64
+// ------------------------------------------------------------------------------------------
+
+const P1: u64 = 0x9E37_79B1_85EB_CA87;
+const P2: u64 = 0xC2B2_AE3D_27D4_EB4F;
+const P3: u64 = 0x1656_67B1_9E37_79F9;
+const P4: u64 = 0x85EB_CA77_C2B2_AE63;
+const P5: u64 = 0x27D4_EB2F_1656_67C5;
+
+#[inline]
+fn round(acc: u64, input: u64) -> u64 {
+    acc.wrapping_add(input.wrapping_mul(P2))
+        .rotate_left(31)
+        .wrapping_mul(P1)
+}
+
+#[inline]
+fn merge(acc: u64, v: u64) -> u64 {
+    (acc ^ round(0, v)).wrapping_mul(P1).wrapping_add(P4)
+}
+
+#[inline]
+fn le64(b: &[u8]) -> u64 {
+    u64::from_le_bytes(b[..8].try_into().expect("8 bytes"))
+}
+
+/// Streaming XXH64 (Yann Collet's xxHash, 64-bit variant): a fast non-cryptographic hash, the
+/// checksum of cache files and the building block of cache keys.
+#[derive(Clone)]
+pub struct Xxh64 {
+    v: [u64; 4],
+    seed: u64,
+    total: u64,
+    buf: [u8; 32],
+    buf_len: usize,
+}
+
+impl Xxh64 {
+    pub fn new(seed: u64) -> Xxh64 {
+        Xxh64 {
+            v: [
+                seed.wrapping_add(P1).wrapping_add(P2),
+                seed.wrapping_add(P2),
+                seed,
+                seed.wrapping_sub(P1),
+            ],
+            seed,
+            total: 0,
+            buf: [0; 32],
+            buf_len: 0,
+        }
+    }
+
+    #[inline]
+    fn stripe(v: &mut [u64; 4], s: &[u8]) {
+        v[0] = round(v[0], le64(&s[0..]));
+        v[1] = round(v[1], le64(&s[8..]));
+        v[2] = round(v[2], le64(&s[16..]));
+        v[3] = round(v[3], le64(&s[24..]));
+    }
+
+    pub fn update(&mut self, mut data: &[u8]) {
+        self.total += data.len() as u64;
+        if self.buf_len > 0 {
+            let take = (32 - self.buf_len).min(data.len());
+            self.buf[self.buf_len..self.buf_len + take].copy_from_slice(&data[..take]);
+            self.buf_len += take;
+            data = &data[take..];
+            if self.buf_len < 32 {
+                return;
+            }
+            let buf = self.buf;
+            Self::stripe(&mut self.v, &buf);
+            self.buf_len = 0;
+        }
+        let mut chunks = data.chunks_exact(32);
+        for s in &mut chunks {
+            Self::stripe(&mut self.v, s);
+        }
+        let rest = chunks.remainder();
+        self.buf[..rest.len()].copy_from_slice(rest);
+        self.buf_len = rest.len();
+    }
+
+    pub fn finish(&self) -> u64 {
+        let v = self.v;
+        let mut h = if self.total >= 32 {
+            let h = v[0]
+                .rotate_left(1)
+                .wrapping_add(v[1].rotate_left(7))
+                .wrapping_add(v[2].rotate_left(12))
+                .wrapping_add(v[3].rotate_left(18));
+            merge(merge(merge(merge(h, v[0]), v[1]), v[2]), v[3])
+        } else {
+            self.seed.wrapping_add(P5)
+        };
+        h = h.wrapping_add(self.total);
+        let mut tail = &self.buf[..self.buf_len];
+        while tail.len() >= 8 {
+            h ^= round(0, le64(tail));
+            h = h.rotate_left(27).wrapping_mul(P1).wrapping_add(P4);
+            tail = &tail[8..];
+        }
+        if tail.len() >= 4 {
+            let k = u32::from_le_bytes(tail[..4].try_into().expect("4 bytes")) as u64;
+            h ^= k.wrapping_mul(P1);
+            h = h.rotate_left(23).wrapping_mul(P2).wrapping_add(P3);
+            tail = &tail[4..];
+        }
+        for &b in tail {
+            h ^= (b as u64).wrapping_mul(P5);
+            h = h.rotate_left(11).wrapping_mul(P1);
+        }
+        h ^= h >> 33;
+        h = h.wrapping_mul(P2);
+        h ^= h >> 29;
+        h = h.wrapping_mul(P3);
+        h ^ (h >> 32)
+    }
+}
+
+/// XXH64 of `data` with `seed`.
+pub fn xxh64(data: &[u8], seed: u64) -> u64 {
+    let mut h = Xxh64::new(seed);
+    h.update(data);
+    h.finish()
+}
+
+/// XXH64 of the little-endian bytes of `v` (seed 0).
+pub fn hash_f64s(v: &[f64]) -> u64 {
+    let mut h = Xxh64::new(0);
+    let mut buf = Vec::with_capacity(CHUNK.min(8 * v.len()));
+    for c in v.chunks(CHUNK / 8) {
+        buf.clear();
+        for x in c {
+            buf.extend_from_slice(&x.to_le_bytes());
+        }
+        h.update(&buf);
+    }
+    h.finish()
+}
+
+// ------------------------------------------------------------------------------------------
+// Key
+// ------------------------------------------------------------------------------------------
+
+/// The 128-bit key of a cache entry (two XXH64 of the key material with different seeds).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Key(pub [u64; 2]);
+
+impl Key {
+    pub fn hex(&self) -> String {
+        format!("{:016x}{:016x}", self.0[0], self.0[1])
+    }
+}
+
+/// The key material: length-prefixed fields, floats by their bits.
+struct KeyBuilder(Vec<u8>);
+
+impl KeyBuilder {
+    fn bytes(&mut self, b: &[u8]) {
+        self.0.extend_from_slice(&(b.len() as u64).to_le_bytes());
+        self.0.extend_from_slice(b);
+    }
+    fn str(&mut self, s: &str) {
+        self.bytes(s.as_bytes());
+    }
+    fn u64(&mut self, v: u64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn f64(&mut self, v: f64) {
+        self.u64(v.to_bits());
+    }
+    fn opt_f64(&mut self, v: Option<f64>) {
+        match v {
+            Some(x) => {
+                self.u64(1);
+                self.f64(x);
+            }
+            None => self.u64(0),
+        }
+    }
+    fn finish(&self) -> Key {
+        Key([xxh64(&self.0, 0), xxh64(&self.0, 0x5eed_0f_ca11)])
+    }
+}
+
+/// The identity of the running program's code: XXH64 of its executable file, read once.
+/// Any rebuild that changes the machine code (the source, a dependency such as faer, the
+/// compiler or its flags) changes it, so an entry is never used by other code than wrote it.
+pub fn build_id() -> Result<u64, String> {
+    static ID: std::sync::OnceLock<Result<u64, String>> = std::sync::OnceLock::new();
+    ID.get_or_init(|| {
+        let exe = std::env::current_exe().map_err(|e| format!("cannot locate the program: {e}"))?;
+        let bytes = std::fs::read(&exe)
+            .map_err(|e| format!("cannot read the program {}: {e}", exe.display()))?;
+        Ok(xxh64(&bytes, 0))
+    })
+    .clone()
+}
+
+/// The key of a model's linear algebra: the cache format, the program version and build
+/// ([`build_id`]), the ordering, the bytes of the mesh file, the bodies (group, E, ν) in
+/// order, the supports (group, ux, uy) in order, the pilot's group, and the contact pair
+/// (slave, master, the candidate gap in use, the normal kind). Nothing else changes `K`, the
+/// constraint rows or the loads of the prescribed displacements: not the friction law, the
+/// contact method, the tractions, the stages or the output, nor the number of threads (the
+/// factorisation is bit-identical with any). `gap` is the candidate gap the pair was built
+/// with (`None` without contact).
+pub fn model_key(case: &Case, mesh_bytes: &[u8], gap: Option<f64>) -> Result<Key, String> {
+    let mut k = KeyBuilder(Vec::with_capacity(mesh_bytes.len() + 1024));
+    k.str("stickslip model cache");
+    k.u64(FORMAT as u64);
+    k.str(env!("CARGO_PKG_VERSION"));
+    k.u64(build_id()?);
+    k.str(ORDERING);
+    k.bytes(mesh_bytes);
+    k.u64(case.bodies.len() as u64);
+    for b in &case.bodies {
+        k.str(&b.group);
+        k.f64(b.e);
+        k.f64(b.nu);
+    }
+    k.u64(case.supports.len() as u64);
+    for s in &case.supports {
+        k.str(&s.group);
+        k.opt_f64(s.ux);
+        k.opt_f64(s.uy);
+    }
+    match &case.pilot {
+        Some(p) => {
+            k.u64(1);
+            k.str(&p.group);
+        }
+        None => k.u64(0),
+    }
+    match &case.contact {
+        Some(c) => {
+            k.u64(1);
+            k.str(&c.slave);
+            k.str(&c.master);
+            k.opt_f64(gap);
+            k.str(match c.normal {
+                crate::case::NormalKind::Common => "common",
+                crate::case::NormalKind::Local => "local",
+            });
+        }
+        None => k.u64(0),
+    }
+    Ok(k.finish())
+}
+
+// ------------------------------------------------------------------------------------------
+// Entries
+// ------------------------------------------------------------------------------------------
+
+/// The words of one section.
+pub enum Words {
+    U64(Vec<u64>),
+    Usize(Vec<usize>),
+    F64(Vec<f64>),
+    /// Floats shared with the model (the factor values, written while the run goes on).
+    Shared(Arc<Vec<f64>>),
+}
+
+impl Words {
+    pub fn len(&self) -> usize {
+        match self {
+            Words::U64(v) => v.len(),
+            Words::Usize(v) => v.len(),
+            Words::F64(v) => v.len(),
+            Words::Shared(v) => v.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn kind(&self) -> u32 {
+        match self {
+            Words::U64(_) | Words::Usize(_) => 1,
+            Words::F64(_) | Words::Shared(_) => 2,
+        }
+    }
+
+    /// Calls `f` with the little-endian bytes of the words, a chunk at a time.
+    fn for_each_chunk(
+        &self,
+        mut f: impl FnMut(&[u8]) -> std::io::Result<()>,
+    ) -> std::io::Result<()> {
+        let mut buf = Vec::with_capacity(CHUNK);
+        let per = CHUNK / 8;
+        macro_rules! chunks {
+            ($v:expr, $conv:expr) => {
+                for c in $v.chunks(per) {
+                    buf.clear();
+                    for x in c {
+                        buf.extend_from_slice(&$conv(*x).to_le_bytes());
+                    }
+                    f(&buf)?;
+                }
+            };
+        }
+        match self {
+            Words::U64(v) => chunks!(v, |x: u64| x),
+            Words::Usize(v) => chunks!(v, |x: usize| x as u64),
+            Words::F64(v) => chunks!(v, |x: f64| x),
+            Words::Shared(v) => chunks!(v.as_slice(), |x: f64| x),
+        }
+        Ok(())
+    }
+
+    /// The words as unsigned integers (a section of kind 1).
+    pub fn into_u64(self) -> Option<Vec<u64>> {
+        match self {
+            Words::U64(v) => Some(v),
+            Words::Usize(v) => Some(v.into_iter().map(|x| x as u64).collect()),
+            _ => None,
+        }
+    }
+
+    /// The words as floats (a section of kind 2).
+    pub fn into_f64(self) -> Option<Vec<f64>> {
+        match self {
+            Words::F64(v) => Some(v),
+            Words::Shared(v) => Some(Arc::try_unwrap(v).unwrap_or_else(|a| (*a).clone())),
+            _ => None,
+        }
+    }
+}
+
+/// A cache entry: tagged sections, written and read in this order.
+pub struct Entry {
+    pub sections: Vec<(u32, Words)>,
+}
+
+impl Entry {
+    fn header_len(&self) -> u64 {
+        32 + 24 * self.sections.len() as u64 + 8
+    }
+
+    /// Size of the entry's file in bytes.
+    pub fn file_len(&self) -> u64 {
+        self.header_len()
+            + self
+                .sections
+                .iter()
+                .map(|(_, w)| 8 * w.len() as u64)
+                .sum::<u64>()
+    }
+}
+
+struct SectionInfo {
+    tag: u32,
+    kind: u32,
+    words: u64,
+    hash: u64,
+}
+
+fn header_bytes(key: Key, table: &[SectionInfo]) -> Vec<u8> {
+    let mut h = Vec::with_capacity(32 + 24 * table.len() + 8);
+    h.extend_from_slice(&MAGIC);
+    h.extend_from_slice(&FORMAT.to_le_bytes());
+    h.extend_from_slice(&(table.len() as u32).to_le_bytes());
+    h.extend_from_slice(&key.0[0].to_le_bytes());
+    h.extend_from_slice(&key.0[1].to_le_bytes());
+    for s in table {
+        h.extend_from_slice(&s.tag.to_le_bytes());
+        h.extend_from_slice(&s.kind.to_le_bytes());
+        h.extend_from_slice(&s.words.to_le_bytes());
+        h.extend_from_slice(&s.hash.to_le_bytes());
+    }
+    let sum = xxh64(&h, 0);
+    h.extend_from_slice(&sum.to_le_bytes());
+    h
+}
+
+/// Writes `entry` under `key` to `path`, through a temporary file in the same directory.
+fn write_entry(path: &Path, key: Key, entry: &Entry) -> std::io::Result<u64> {
+    static SERIAL: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let tmp = dir.join(format!(
+        ".{name}.tmp{}-{}",
+        std::process::id(),
+        SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    ));
+    let result = (|| {
+        let mut f = std::io::BufWriter::with_capacity(CHUNK, std::fs::File::create(&tmp)?);
+        // Placeholder header, rewritten once the section hashes are known.
+        f.write_all(&vec![0u8; entry.header_len() as usize])?;
+        let mut table = Vec::with_capacity(entry.sections.len());
+        for (tag, words) in &entry.sections {
+            let mut h = Xxh64::new(0);
+            words.for_each_chunk(|b| {
+                h.update(b);
+                f.write_all(b)
+            })?;
+            table.push(SectionInfo {
+                tag: *tag,
+                kind: words.kind(),
+                words: words.len() as u64,
+                hash: h.finish(),
+            });
+        }
+        let mut f = f.into_inner().map_err(|e| e.into_error())?;
+        f.seek(SeekFrom::Start(0))?;
+        f.write_all(&header_bytes(key, &table))?;
+        drop(f);
+        std::fs::rename(&tmp, path)?;
+        Ok(entry.file_len())
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// An entry opened for reading: its header checked, its sections read one after the other
+/// (each checked against its hash).
+pub struct Reader {
+    file: std::fs::File,
+    table: Vec<SectionInfo>,
+    next: usize,
+    /// Size of the file in bytes.
+    pub bytes: u64,
+}
+
+/// What [`Store::open`] finds.
+pub enum Open {
+    /// No entry for the key.
+    Missing,
+    /// An entry that cannot be used, and why.
+    Corrupt(String),
+    Ready(Reader),
+}
+
+impl Reader {
+    fn open(path: &Path, key: Key) -> Open {
+        let mut file = match std::fs::File::open(path) {
+            Ok(f) => f,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Open::Missing,
+            Err(e) => return Open::Corrupt(format!("cannot be read: {e}")),
+        };
+        match Self::header(&mut file, key) {
+            Ok((table, bytes)) => Open::Ready(Reader {
+                file,
+                table,
+                next: 0,
+                bytes,
+            }),
+            Err(why) => Open::Corrupt(why),
+        }
+    }
+
+    fn header(file: &mut std::fs::File, key: Key) -> Result<(Vec<SectionInfo>, u64), String> {
+        let len = file
+            .metadata()
+            .map_err(|e| format!("cannot be read: {e}"))?
+            .len();
+        let short = |need: u64| format!("truncated: {len} bytes, its header alone needs {need}");
+        let mut head = [0u8; 32];
+        file.read_exact(&mut head).map_err(|_| short(32))?;
+        if head[..8] != MAGIC {
+            return Err("not a stickslip model cache file (bad magic number)".into());
+        }
+        let format = u32::from_le_bytes(head[8..12].try_into().expect("4 bytes"));
+        if format != FORMAT {
+            return Err(format!(
+                "written in cache format {format}, this program uses format {FORMAT}"
+            ));
+        }
+        let count = u32::from_le_bytes(head[12..16].try_into().expect("4 bytes")) as usize;
+        if count > MAX_SECTIONS {
+            return Err(format!("corrupt header ({count} sections)"));
+        }
+        let mut rest = vec![0u8; 24 * count + 8];
+        let need = 32 + rest.len() as u64;
+        file.read_exact(&mut rest).map_err(|_| short(need))?;
+        let mut all = head.to_vec();
+        all.extend_from_slice(&rest[..24 * count]);
+        let sum = le64(&rest[24 * count..]);
+        if xxh64(&all, 0) != sum {
+            return Err("corrupt header (checksum mismatch)".into());
+        }
+        let file_key = Key([le64(&head[16..]), le64(&head[24..])]);
+        if file_key != key {
+            return Err(format!("holds another model (key {})", file_key.hex()));
+        }
+        let table: Vec<SectionInfo> = rest[..24 * count]
+            .chunks_exact(24)
+            .map(|c| SectionInfo {
+                tag: u32::from_le_bytes(c[0..4].try_into().expect("4 bytes")),
+                kind: u32::from_le_bytes(c[4..8].try_into().expect("4 bytes")),
+                words: le64(&c[8..]),
+                hash: le64(&c[16..]),
+            })
+            .collect();
+        let expected = table
+            .iter()
+            .try_fold(need, |acc, s| s.words.checked_mul(8)?.checked_add(acc))
+            .ok_or_else(|| "corrupt header (section sizes overflow)".to_string())?;
+        if len < expected {
+            return Err(format!("truncated: {len} of {expected} bytes"));
+        }
+        if len > expected {
+            return Err(format!(
+                "{} bytes longer than its header says",
+                len - expected
+            ));
+        }
+        Ok((table, len))
+    }
+
+    /// Sections not yet read.
+    pub fn remaining(&self) -> usize {
+        self.table.len() - self.next
+    }
+
+    /// The tag of the next section, if any.
+    pub fn next_tag(&self) -> Option<u32> {
+        self.table.get(self.next).map(|s| s.tag)
+    }
+
+    /// Reads the next section and checks it against its hash: (tag, words).
+    pub fn read_next(&mut self) -> Result<(u32, Words), String> {
+        let s = self
+            .table
+            .get(self.next)
+            .ok_or_else(|| "fewer sections than expected".to_string())?;
+        self.next += 1;
+        let n = usize::try_from(s.words).map_err(|_| "section too large".to_string())?;
+        let mut h = Xxh64::new(0);
+        let mut buf = vec![0u8; CHUNK.min(8 * n)];
+        let mut done = 0usize;
+        let words = match s.kind {
+            1 => {
+                let mut v: Vec<u64> = Vec::with_capacity(n);
+                while done < n {
+                    let k = (n - done).min(CHUNK / 8);
+                    let b = &mut buf[..8 * k];
+                    self.file
+                        .read_exact(b)
+                        .map_err(|e| format!("cannot be read: {e}"))?;
+                    h.update(b);
+                    v.extend(b.chunks_exact(8).map(le64));
+                    done += k;
+                }
+                Words::U64(v)
+            }
+            2 => {
+                let mut v: Vec<f64> = Vec::with_capacity(n);
+                while done < n {
+                    let k = (n - done).min(CHUNK / 8);
+                    let b = &mut buf[..8 * k];
+                    self.file
+                        .read_exact(b)
+                        .map_err(|e| format!("cannot be read: {e}"))?;
+                    h.update(b);
+                    v.extend(b.chunks_exact(8).map(|c| f64::from_bits(le64(c))));
+                    done += k;
+                }
+                Words::F64(v)
+            }
+            k => return Err(format!("corrupt header (section kind {k})")),
+        };
+        if h.finish() != s.hash {
+            return Err(format!(
+                "corrupt data (checksum mismatch in section {} of {})",
+                self.next,
+                self.table.len()
+            ));
+        }
+        Ok((s.tag, words))
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Store
+// ------------------------------------------------------------------------------------------
+
+/// Where the cache is, from the command line.
+#[derive(Clone, Debug, Default)]
+pub enum Choice {
+    /// The default place (environment, then the per-user cache directory).
+    #[default]
+    Default,
+    /// `--cache DIR`.
+    Dir(PathBuf),
+    /// `--no-cache`.
+    Off,
+}
+
+/// How the cache served a model, for `summary.json`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Status {
+    /// Loaded from the cache.
+    Hit,
+    /// Not in the cache: built, and written to it.
+    Miss,
+    /// An entry was there but unusable (truncated, corrupt, foreign): built and written again.
+    Rebuilt,
+    /// No cache (`--no-cache`, or no place for it).
+    Off,
+}
+
+/// The cache's part in a model, as `summary.json` reports it.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Report {
+    pub status: Status,
+    /// The entry's file.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path: Option<String>,
+    /// Its size.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bytes: Option<u64>,
+    /// Why an entry was rebuilt, not written, or why there is no cache.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+}
+
+impl Report {
+    pub fn off(note: Option<String>) -> Report {
+        Report {
+            status: Status::Off,
+            path: None,
+            bytes: None,
+            note,
+        }
+    }
+}
+
+/// A cache directory and its size cap.
+#[derive(Clone, Debug)]
+pub struct Store {
+    pub dir: PathBuf,
+    pub max_bytes: u64,
+    /// Print warnings (an unusable entry, a failed write) on standard error.
+    pub warn: bool,
+}
+
+fn env_set(name: &str) -> Option<String> {
+    std::env::var(name).ok().filter(|v| !v.is_empty())
+}
+
+/// Parses a size: bytes, or a number with a binary suffix K, M, G, T (optionally `iB` or `B`).
+pub fn parse_size(s: &str) -> Option<u64> {
+    let t = s.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (num, unit) = t.split_at(split);
+    let x: f64 = num.parse().ok()?;
+    let mult: u64 = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 1,
+        "k" | "kb" | "kib" => 1 << 10,
+        "m" | "mb" | "mib" => 1 << 20,
+        "g" | "gb" | "gib" => 1 << 30,
+        "t" | "tb" | "tib" => 1 << 40,
+        _ => return None,
+    };
+    (x.is_finite() && x >= 0.0).then(|| (x * mult as f64) as u64)
+}
+
+impl Store {
+    /// The cache a run uses (see the module documentation), or the report of why it has none.
+    pub fn resolve(choice: &Choice, warn: bool) -> Result<Store, Report> {
+        let no_cache = env_set("STICKSLIP_NO_CACHE").is_some_and(|v| v != "0");
+        let dir = match choice {
+            Choice::Off => return Err(Report::off(None)),
+            Choice::Dir(d) => d.clone(),
+            Choice::Default if no_cache => {
+                return Err(Report::off(Some("STICKSLIP_NO_CACHE is set".into())));
+            }
+            Choice::Default => {
+                let xdg = env_set("XDG_CACHE_HOME")
+                    .map(PathBuf::from)
+                    .filter(|p| p.is_absolute());
+                match env_set("STICKSLIP_CACHE_DIR")
+                    .map(PathBuf::from)
+                    .or_else(|| xdg.map(|x| x.join("stickslip")))
+                    .or_else(|| env_set("HOME").map(|h| PathBuf::from(h).join(".cache/stickslip")))
+                {
+                    Some(d) => d,
+                    None => {
+                        return Err(Report::off(Some(
+                            "no cache directory: set STICKSLIP_CACHE_DIR or HOME, or pass --cache DIR"
+                                .into(),
+                        )));
+                    }
+                }
+            }
+        };
+        let max_bytes = match env_set("STICKSLIP_CACHE_MAX") {
+            None => DEFAULT_MAX_BYTES,
+            Some(v) => match parse_size(&v) {
+                Some(b) => b,
+                None => {
+                    if warn {
+                        eprintln!(
+                            "warning: STICKSLIP_CACHE_MAX = `{v}` is not a size (e.g. 4G, 500M, 1073741824); using 4 GiB"
+                        );
+                    }
+                    DEFAULT_MAX_BYTES
+                }
+            },
+        };
+        Ok(Store {
+            dir,
+            max_bytes,
+            warn,
+        })
+    }
+
+    /// The file of the entry with `key`.
+    pub fn path(&self, key: Key) -> PathBuf {
+        self.dir.join(format!("model-{}.bin", key.hex()))
+    }
+
+    /// Opens the entry with `key`; a hit marks it as recently used.
+    pub fn open(&self, key: Key) -> Open {
+        let path = self.path(key);
+        let open = Reader::open(&path, key);
+        if let Open::Ready(r) = &open {
+            let _ = r.file.set_modified(std::time::SystemTime::now());
+        }
+        open
+    }
+
+    /// Deletes an unusable entry (reported with `why`).
+    pub fn discard(&self, key: Key, why: &str) {
+        let path = self.path(key);
+        if self.warn {
+            eprintln!(
+                "warning: model cache: {} {why}; ignoring it and building the model again",
+                path.display()
+            );
+        }
+        let _ = std::fs::remove_file(&path);
+    }
+
+    /// Writes `entry` under `key` in a background thread (after making room for it under the
+    /// cap). Returns the report of the entry (`status` is the caller's) and the job, which
+    /// waits for the write when dropped.
+    pub fn write_in_background(
+        &self,
+        key: Key,
+        entry: Entry,
+        status: Status,
+        note: Option<String>,
+    ) -> (Report, Option<Job>) {
+        let path = self.path(key);
+        let bytes = entry.file_len();
+        let mut report = Report {
+            status,
+            path: Some(path.display().to_string()),
+            bytes: Some(bytes),
+            note,
+        };
+        if bytes > self.max_bytes {
+            let why = format!(
+                "not written: {bytes} bytes exceed the cache cap of {} bytes (STICKSLIP_CACHE_MAX)",
+                self.max_bytes
+            );
+            report.note = Some(match report.note.take() {
+                Some(n) => format!("{n}; {why}"),
+                None => why,
+            });
+            report.path = None;
+            return (report, None);
+        }
+        let store = self.clone();
+        let p = path.clone();
+        let handle = std::thread::Builder::new()
+            .name("model-cache-writer".into())
+            .spawn(move || {
+                std::fs::create_dir_all(&store.dir)
+                    .map_err(|e| format!("cannot create {}: {e}", store.dir.display()))?;
+                evict(&store.dir, store.max_bytes.saturating_sub(bytes), &p);
+                write_entry(&p, key, &entry).map_err(|e| e.to_string())?;
+                Ok(())
+            });
+        match handle {
+            Ok(h) => (
+                report,
+                Some(Job {
+                    handle: Some(h),
+                    path,
+                    warn: self.warn,
+                }),
+            ),
+            Err(e) => {
+                report.note = Some(format!("not written: cannot start the writer: {e}"));
+                (report, None)
+            }
+        }
+    }
+}
+
+/// Deletes the least recently used entries of `dir` (files `model-*.bin`, by modification
+/// time) until they take at most `budget` bytes, never `keep`; and temporary files left by
+/// writers that were killed (older than an hour).
+pub fn evict(dir: &Path, budget: u64, keep: &Path) {
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let now = std::time::SystemTime::now();
+    let mut entries: Vec<(std::time::SystemTime, u64, PathBuf)> = Vec::new();
+    for e in rd.flatten() {
+        let name = e.file_name().to_string_lossy().to_string();
+        let Ok(md) = e.metadata() else { continue };
+        let mtime = md.modified().unwrap_or(std::time::UNIX_EPOCH);
+        if name.starts_with(".model-") && name.contains(".tmp") {
+            if now.duration_since(mtime).is_ok_and(|d| d.as_secs() > 3600) {
+                let _ = std::fs::remove_file(e.path());
+            }
+            continue;
+        }
+        if name.starts_with("model-") && name.ends_with(".bin") && md.is_file() {
+            entries.push((mtime, md.len(), e.path()));
+        }
+    }
+    let mut total: u64 = entries.iter().map(|e| e.1).sum();
+    entries.sort_by(|a, b| a.0.cmp(&b.0).then_with(|| a.2.cmp(&b.2)));
+    for (_, len, path) in entries {
+        if total <= budget {
+            break;
+        }
+        if path == keep {
+            continue;
+        }
+        if std::fs::remove_file(&path).is_ok() {
+            total -= len;
+        }
+    }
+}
+
+/// A cache entry being written in the background; dropping it waits for the write (and
+/// reports a failure on standard error).
+pub struct Job {
+    handle: Option<std::thread::JoinHandle<Result<(), String>>>,
+    path: PathBuf,
+    warn: bool,
+}
+
+impl Job {
+    /// Waits for the write: `Err` with the reason if it failed.
+    pub fn wait(mut self) -> Result<(), String> {
+        self.join()
+    }
+
+    fn join(&mut self) -> Result<(), String> {
+        match self.handle.take().map(|h| h.join()) {
+            None | Some(Ok(Ok(()))) => Ok(()),
+            Some(Ok(Err(e))) => Err(e),
+            Some(Err(_)) => Err("the writer panicked".into()),
+        }
+    }
+}
+
+impl Drop for Job {
+    fn drop(&mut self) {
+        if let Err(e) = self.join()
+            && self.warn
+        {
+            eprintln!(
+                "warning: model cache: could not write {}: {e}",
+                self.path.display()
+            );
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn xxh64_reference_values() {
+        assert_eq!(xxh64(b"", 0), 0xEF46_DB37_51D8_E999);
+        assert_eq!(xxh64(b"a", 0), 0xD24E_C4F1_A98C_6E5B);
+        assert_eq!(xxh64(b"abc", 0), 0x44BC_2CF5_AD77_0999);
+        // Longer inputs (the 32-byte stripes), values from the `xxhash` Python package.
+        let data: Vec<u8> = (0..1000u32).map(|i| (i * 7 + i / 13) as u8).collect();
+        assert_eq!(xxh64(&data, 42), 0xe7ca_5372_fc8e_a0a7);
+        assert_eq!(xxh64(&data[..100], 0), 0xdad7_6c5e_3ed4_0107);
+    }
+
+    #[test]
+    fn xxh64_streaming_matches_one_shot() {
+        let data: Vec<u8> = (0..1000u32).map(|i| (i * 7 + i / 13) as u8).collect();
+        for split in [0, 1, 7, 31, 32, 33, 100, 999, 1000] {
+            let mut h = Xxh64::new(42);
+            h.update(&data[..split]);
+            h.update(&data[split..]);
+            assert_eq!(h.finish(), xxh64(&data, 42), "split {split}");
+        }
+    }
+
+    #[test]
+    fn sizes() {
+        assert_eq!(parse_size("4G"), Some(4 << 30));
+        assert_eq!(parse_size("500MiB"), Some(500 << 20));
+        assert_eq!(parse_size("1024"), Some(1024));
+        assert_eq!(parse_size("1.5k"), Some(1536));
+        assert_eq!(parse_size("lots"), None);
+    }
+}
