@@ -36,9 +36,6 @@ use std::sync::Arc;
 /// Version of the file format and of the meaning of the sections. Bump it when either changes.
 pub const FORMAT: u32 = 1;
 const MAGIC: [u8; 8] = *b"stkslpMC";
-/// The fill-reducing ordering the factorisations use (part of the key: a cache written with
-/// another ordering must not be used). Change it with the ordering in [`crate::linsolve`].
-pub const ORDERING: &str = "amd";
 /// Default size cap of the cache directory.
 pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
 /// At most this many sections in a file (a larger count is a corrupt header).
@@ -262,7 +259,7 @@ pub fn model_key(case: &Case, mesh_bytes: &[u8], gap: Option<f64>) -> Result<Key
     k.u64(FORMAT as u64);
     k.str(env!("CARGO_PKG_VERSION"));
     k.u64(build_id()?);
-    k.str(ORDERING);
+    k.str(crate::linsolve::ordering_choice().name());
     k.bytes(mesh_bytes);
     k.u64(case.bodies.len() as u64);
     for b in &case.bodies {

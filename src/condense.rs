@@ -10,8 +10,10 @@
 //! ```text
 //!   S u_R = g + r_R,   S = K_RR − K_RI K_II⁻¹ K_IR,   g = f_R − K_RI K_II⁻¹ f_I .
 //! ```
-//! `S` comes out of one sparse Cholesky factorisation that orders `R` last
-//! ([`PartialCholesky`]): `S = L_RR L_RRᵀ`.
+//! Without contact, `S` comes out of one sparse Cholesky factorisation that orders `R` last
+//! ([`PartialCholesky`]): `S = L_RR L_RRᵀ`. With contact the condensation goes straight to the
+//! contact unknowns: the saddle-point matrix `[K̂ Yᵀ; Y 0]` is factorised ([`SaddleFactor`],
+//! [`Factor::Saddle`]) and only `K̂` solves are asked of this module (`S` is never formed).
 //!
 //! A body held only through retained DOFs (the upper half-cylinder hangs on the pilot) makes
 //! `K` singular. The listed *grounded* DOFs get a spring `k_g` to ground in the factorised

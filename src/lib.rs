@@ -22,6 +22,7 @@ pub mod linsolve;
 pub mod loads;
 pub mod mesh;
 pub mod model;
+pub mod ordering;
 pub mod output;
 pub mod probe;
 pub mod quadrature;

@@ -358,6 +358,16 @@ fn order_leading(
     Ok(fwd)
 }
 
+/// The ordering of the free DOFs of a contact model: AMD, or nested dissection with the
+/// environment variable `STICKSLIP_ORDERING=nd` (an experimental switch for the comparison in
+/// docs/benchmarks.md; part of the model cache's key).
+pub fn ordering_choice() -> crate::ordering::Ordering {
+    match std::env::var("STICKSLIP_ORDERING").as_deref() {
+        Ok("nd") => crate::ordering::Ordering::NestedDissection,
+        _ => crate::ordering::Ordering::Amd,
+    }
+}
+
 impl SaddleSymbolic {
     /// The pattern of `A` from the upper CSC pattern of `K̂` (order `n`) and the rows of `Y`
     /// (free-DOF index, coefficient), and its symbolic analysis: the free DOFs ordered by a
@@ -368,7 +378,12 @@ impl SaddleSymbolic {
         row_idx: &[usize],
         y_rows: &[Vec<(usize, f64)>],
     ) -> Result<SaddleSymbolic, FactorError> {
-        let fwd = order_leading(n, col_ptr, row_idx, n + y_rows.len())?;
+        let fwd = match ordering_choice() {
+            crate::ordering::Ordering::Amd => order_leading(n, col_ptr, row_idx, n + y_rows.len())?,
+            crate::ordering::Ordering::NestedDissection => {
+                crate::ordering::nested_dissection(n, col_ptr, row_idx)
+            }
+        };
         Self::with_ordering(n, col_ptr, row_idx, y_rows, &fwd)
     }
 

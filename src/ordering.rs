@@ -9,15 +9,25 @@
 //!    neighbourhood; the merge is then checked exactly (every edge of the matrix graph is an
 //!    edge of the blown-up vertex graph, and the two graphs have the same number of edges),
 //!    and dropped if the check fails.
-//! 2. **Dissection** of the vertex graph, one subgraph at a time: a disconnected subgraph is
-//!    split into its components, ordered one after the other; a connected one is cut by a
-//!    vertex separator taken from the breadth-first level structure of a pseudo-peripheral
-//!    vertex (the smallest level, after pruning, that leaves both sides within the balance
-//!    bound), then improved by Fiduccia–Mattheyses passes that move separator vertices into
-//!    a side (pulling that vertex's neighbours on the other side into the separator) and keep
-//!    the best state of each pass. The order is: part 1, part 2, separator last.
+//! 2. **Dissection** of the vertex graph, one subgraph at a time, each cut multilevel:
+//!    * coarsening by heavy-edge matching (vertices visited in a fixed pseudo-random order)
+//!      down to about [`NdOptions::coarsest`] vertices; matching keeps components, so a
+//!      disconnected subgraph is recognised on its coarsest graph and split into its
+//!      components, ordered one after the other;
+//!    * on the coarsest graph, vertex separators from the breadth-first level structures of
+//!      [`NdOptions::initial_tries`] roots (a pseudo-peripheral vertex first): the lightest
+//!      level, pruned to its vertices with a neighbour in the next level, whose sides are
+//!      within the balance bound [`NdOptions::max_part_fraction`];
+//!    * the best [`NdOptions::candidates`] of them are projected back level by level and
+//!      improved on each by Fiduccia–Mattheyses passes (a separator vertex moves into a side
+//!      and pulls its neighbours on the other side into the separator; the best state of a
+//!      pass is kept); the best candidate wins.
+//!
+//!    The order is: part 1, part 2, separator last.
 //! 3. **Leaves** (subgraphs of at most [`NdOptions::leaf_size`] vertices, or that cannot be
-//!    cut) are ordered by faer's AMD on the leaf's own graph.
+//!    cut) are ordered by faer's AMD on the leaf together with its halo (the neighbouring
+//!    separator vertices, joined into a clique), so that the leaf's boundary is not taken
+//!    for cheap and eliminated first.
 //! 4. **Expansion**: each vertex's DOFs are numbered consecutively, in increasing order.
 //!
 //! Everything is sequential and depends only on the pattern: the same pattern gives the same
@@ -113,7 +123,7 @@ impl Default for NdOptions {
             max_part_fraction: 0.6,
             coarsest: 120,
             initial_tries: 8,
-            candidates: 4,
+            candidates: 2,
             candidates_up_to: 2000,
             fm_passes: 6,
             fm_patience: 100,
@@ -167,7 +177,6 @@ pub fn nested_dissection_with(
         fwd.extend_from_slice(&dofs[dof_ptr[v]..dof_ptr[v + 1]]);
     }
     debug_assert_eq!(fwd.len(), n);
-    if std::env::var_os("ND_DEBUG").is_some() { RT.with(|r| eprintln!("refine by level {:.3?}\ncoarsen by level {:.3?}", &r.borrow()[..8], &r.borrow()[8..])); }
     fwd
 }
 
@@ -336,7 +345,10 @@ type Compressed = (Graph, Vec<usize>, Vec<usize>);
 /// Merges indistinguishable DOFs into vertices (see the module documentation).
 /// The vertex graph, and the DOFs of each vertex (`dofs[dof_ptr[v]..dof_ptr[v + 1]]`).
 fn compress(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Compressed {
-    assert!(n < u32::MAX as usize, "matrix too large for 32-bit vertex indices");
+    assert!(
+        n < u32::MAX as usize,
+        "matrix too large for 32-bit vertex indices"
+    );
     let col = |c: usize| &row_idx[col_ptr[c]..col_ptr[c + 1]];
     // Closed-neighbourhood hash and degree; distinct off-diagonal edges.
     let mut h: Vec<u64> = (0..n as u64).map(mix).collect();
@@ -359,9 +371,9 @@ fn compress(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Compressed {
     let mut idx: Vec<u32> = (0..n as u32).collect();
     idx.sort_unstable_by_key(|&i| (h[i as usize], deg[i as usize], i));
     let mut rep: Vec<u32> = (0..n as u32).collect();
-    for run in idx.chunk_by(|&a, &b| {
-        (h[a as usize], deg[a as usize]) == (h[b as usize], deg[b as usize])
-    }) {
+    for run in
+        idx.chunk_by(|&a, &b| (h[a as usize], deg[a as usize]) == (h[b as usize], deg[b as usize]))
+    {
         for &i in &run[1..] {
             rep[i as usize] = run[0];
         }
@@ -493,8 +505,6 @@ fn quotient(
     ))
 }
 
-
-thread_local! { pub static RT: std::cell::RefCell<[f64; 16]> = const { std::cell::RefCell::new([0.0; 16]) }; }
 /// Side of a vertex in a bisection.
 const A: u8 = 0;
 const B: u8 = 1;
@@ -510,7 +520,6 @@ enum Cut {
 
 /// Orders the graph `g` (vertices `ids` of the compressed graph) into positions
 /// `off..off + g.n()`, pushing the subgraphs it is cut into onto `stack`.
-#[inline(never)]
 fn dissect(
     g: Graph,
     ids: Vec<u32>,
@@ -543,9 +552,6 @@ fn dissect(
                 leaf(&g, &ids, off, pos, lv);
                 return;
             }
-            if n > 300 && std::env::var_os("ND_DEBUG").is_some() {
-                eprintln!("n {n} A {na} B {nb} S {}", n - na - nb);
-            }
             let mut k = off + na + nb;
             for v in 0..n {
                 if side[v] == SEP {
@@ -566,7 +572,6 @@ fn dissect(
 
 /// Connected components: the component of each vertex (numbered in the order of their
 /// smallest vertex) and their number.
-#[inline(never)]
 fn components(g: &Graph) -> (Vec<u32>, usize) {
     let n = g.n();
     let mut comp = vec![u32::MAX; n];
@@ -600,7 +605,6 @@ fn components(g: &Graph) -> (Vec<u32>, usize) {
 /// level-structure separators from several roots, the best `opts.candidates` of which are
 /// refined level by level on the way back (only the best one beyond
 /// `opts.candidates_up_to` vertices).
-#[inline(never)]
 fn bisect(g: &Graph, opts: &NdOptions) -> Cut {
     let maxpw = ((g.total() as f64) * opts.max_part_fraction).ceil() as i64;
     let maxvw = (1.5 * g.total() as f64 / opts.coarsest.max(1) as f64).ceil() as u64;
@@ -611,9 +615,7 @@ fn bisect(g: &Graph, opts: &NdOptions) -> Cut {
         if cur.n() <= opts.coarsest {
             break;
         }
-        let t0 = std::time::Instant::now();
         let (c, cmap) = coarsen(cur, maxvw, &mut seed);
-        RT.with(|r| { let mut r = r.borrow_mut(); r[8 + coarse.len().min(7)] += t0.elapsed().as_secs_f64(); });
         if c.n() as f64 > 0.95 * cur.n() as f64 {
             break;
         }
@@ -637,9 +639,8 @@ fn bisect(g: &Graph, opts: &NdOptions) -> Cut {
             (score(&pw, maxpw), side, pw)
         })
         .collect();
-    let best_of = |cands: &[(Score, Vec<u8>, [i64; 3])]| {
-        (0..cands.len()).min_by_key(|&i| (cands[i].0, i))
-    };
+    let best_of =
+        |cands: &[(Score, Vec<u8>, [i64; 3])]| (0..cands.len()).min_by_key(|&i| (cands[i].0, i));
     for level in (0..=coarse.len()).rev() {
         let fine = if level == 0 { g } else { &coarse[level - 1].0 };
         if fine.n() > opts.candidates_up_to && cands.len() > 1 {
@@ -654,9 +655,7 @@ fn bisect(g: &Graph, opts: &NdOptions) -> Cut {
                 *side = cmap.iter().map(|&c| side[c as usize]).collect();
             }
             seps.extend((0..fine.n() as u32).filter(|&v| side[v as usize] == SEP));
-            let t0 = std::time::Instant::now();
             *s = refine(fine, side, pw, &mut seps, maxpw, opts, &mut ws);
-            RT.with(|r| { let mut r = r.borrow_mut(); r[level.min(7)] += t0.elapsed().as_secs_f64(); });
         }
     }
     match best_of(&cands) {
@@ -676,7 +675,6 @@ fn next_random(s: &mut u64) -> u64 {
 /// One level of coarsening: heavy-edge matching (vertices visited in a pseudo-random order
 /// from `seed`, coarse vertices no heavier than `maxvw`), and the coarse graph with summed
 /// vertex and edge weights; `cmap[v]` is the coarse vertex of `v`.
-#[inline(never)]
 fn coarsen(g: &Graph, maxvw: u64, seed: &mut u64) -> (Graph, Vec<u32>) {
     let n = g.n();
     let mut perm: Vec<u32> = (0..n as u32).collect();
@@ -694,10 +692,7 @@ fn coarsen(g: &Graph, maxvw: u64, seed: &mut u64) -> (Graph, Vec<u32>) {
         let mut best_w = 0u32;
         for k in g.xadj[v]..g.xadj[v + 1] {
             let u = g.adj[k] as usize;
-            if mate[u] == NONE
-                && g.ew(k) > best_w
-                && g.vw[v] as u64 + g.vw[u] as u64 <= maxvw
-            {
+            if mate[u] == NONE && g.ew(k) > best_w && g.vw[v] as u64 + g.vw[u] as u64 <= maxvw {
                 best = u;
                 best_w = g.ew(k);
             }
@@ -796,7 +791,6 @@ fn score(pw: &[i64; 3], maxpw: i64) -> Score {
     (pw[0].max(pw[1]) > maxpw, pw[2], (pw[0] - pw[1]).abs())
 }
 
-#[inline(never)]
 fn part_weights(g: &Graph, side: &[u8]) -> [i64; 3] {
     let mut pw = [0i64; 3];
     for v in 0..g.n() {
@@ -808,7 +802,6 @@ fn part_weights(g: &Graph, side: &[u8]) -> [i64; 3] {
 /// Level-structure separators of the (small, connected) graph `g` from
 /// `opts.initial_tries` roots (a pseudo-peripheral vertex, then vertices spread over the
 /// numbering), distinct, best first.
-#[inline(never)]
 fn initial_separators(g: &Graph, maxpw: i64, opts: &NdOptions) -> Vec<Vec<u8>> {
     let n = g.n();
     let (mut order, mut level_ptr, mut dist) = (Vec::new(), Vec::new(), vec![0u32; n]);
@@ -831,7 +824,11 @@ fn initial_separators(g: &Graph, maxpw: i64, opts: &NdOptions) -> Vec<Vec<u8>> {
     let mut all: Vec<(Score, usize, Vec<u8>)> = Vec::new();
     let mut side = vec![SEP; n];
     for t in 0..tries {
-        let r = if t == 0 { root } else { (t - 1) * n / (tries - 1).max(1) };
+        let r = if t == 0 {
+            root
+        } else {
+            (t - 1) * n / (tries - 1).max(1)
+        };
         bfs(g, r, &mut order, &mut level_ptr, &mut dist);
         if level_separator(g, &order, &level_ptr, &dist, maxpw, &mut side)
             && !all.iter().any(|a| a.2 == side)
@@ -846,7 +843,6 @@ fn initial_separators(g: &Graph, maxpw: i64, opts: &NdOptions) -> Vec<Vec<u8>> {
 /// A separator from a level structure: the level of smallest weight, pruned to its vertices
 /// with a neighbour in the next level, whose sides respect `maxpw` (else the level where the
 /// cumulative weight crosses half). False if there are fewer than three levels.
-#[inline(never)]
 fn level_separator(
     g: &Graph,
     order: &[u32],
@@ -860,7 +856,11 @@ fn level_separator(
         return false;
     }
     let total = g.total() as i64;
-    let touches_next = |v: u32, k: u32| g.nbrs(v as usize).iter().any(|&u| dist[u as usize] == k + 1);
+    let touches_next = |v: u32, k: u32| {
+        g.nbrs(v as usize)
+            .iter()
+            .any(|&u| dist[u as usize] == k + 1)
+    };
     let mut best: Option<(i64, i64, usize)> = None;
     let mut half = None;
     let mut before = 0i64;
@@ -1067,7 +1067,7 @@ fn refine(
     let mut moved: Vec<u32> = Vec::new();
     for _ in 0..opts.fm_passes {
         let start_score = score(pw, maxpw);
-        let limit = (2 * seps.len()).clamp(10, opts.fm_patience.max(10));
+        let limit = (seps.len() / 2).clamp(5, opts.fm_patience.max(5));
         for &v in seps.iter() {
             let gv = gains(side, v);
             gain[v as usize] = gv;
@@ -1093,9 +1093,7 @@ fn refine(
                 (None, None) => break,
                 (Some(_), None) => 0,
                 (None, Some(_)) => 1,
-                (Some(a), Some(b)) => {
-                    usize::from(!(a.0 > b.0 || (a.0 == b.0 && pw[0] <= pw[1])))
-                }
+                (Some(a), Some(b)) => usize::from(!(a.0 > b.0 || (a.0 == b.0 && pw[0] <= pw[1]))),
             };
             let (_, v) = cand[to].unwrap();
             let other = 1 - to;
@@ -1212,14 +1210,12 @@ fn leaf(g: &Graph, ids: &[u32], off: usize, pos: &mut [u32], lv: &mut Leaves) {
         lv.loc[v as usize] = i as u32;
     }
     let mut halo: Vec<u32> = Vec::new();
-    if std::env::var_os("ND_NOHALO").is_none() {
-        for &v in ids {
-            for &u in lv.top.nbrs(v as usize) {
-                if lv.stamp[u as usize] != t {
-                    lv.stamp[u as usize] = t;
-                    lv.loc[u as usize] = (m + halo.len()) as u32;
-                    halo.push(u);
-                }
+    for &v in ids {
+        for &u in lv.top.nbrs(v as usize) {
+            if lv.stamp[u as usize] != t {
+                lv.stamp[u as usize] = t;
+                lv.loc[u as usize] = (m + halo.len()) as u32;
+                halo.push(u);
             }
         }
     }
