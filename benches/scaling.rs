@@ -166,10 +166,11 @@ fn main() {
             wall,
             warm,
             peak: s["peak_memory_mib"].as_f64().unwrap_or(0.0),
-            status: if ok {
-                s["status"].as_str().unwrap_or("?").to_string()
-            } else {
-                "failed".into()
+            // A run that stops early (e.g. exit 5 at a local peak) still has its summary.
+            status: match s["status"].as_str() {
+                Some(st) => st.chars().take(40).collect::<String>().replace(',', ";"),
+                None if ok => "?".into(),
+                None => "failed".into(),
             },
         };
         eprintln!("L{l}: {:.2} s, {}", row.wall, row.status);
