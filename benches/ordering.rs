@@ -2,7 +2,8 @@
 //! real stiffness matrix of both VM272 half-cylinders (faces `bottom` and `top` clamped, so
 //! that both bodies are held without a pilot), levels of the mesh ladder.
 //!
-//! Per level and ordering: the time to order, faer's supernodal symbolic analysis with that
+//! Per level and ordering: the time to order (nested dissection also on one thread, and
+//! checked to give the same permutation), faer's supernodal symbolic analysis with that
 //! ordering, the numeric `L Lᵀ` factorisation (best of `ORDERING_REPEAT` runs, default 3),
 //! the exact nnz(L) and the flop count `Σ_j colcount(j)²` (elimination-tree column counts);
 //! then the least-squares slopes of log(factorisation time) and log(flops) against log(DOFs).
@@ -87,6 +88,7 @@ struct Row {
     n: usize,
     kind: Ordering,
     t_order: f64,
+    t_order_1: f64,
     t_symbolic: f64,
     t_numeric: f64,
     nnz_l: u64,
@@ -102,6 +104,25 @@ fn measure(level: usize, k: &UpperCsc, kind: Ordering, repeat: usize) -> Row {
     let t = Instant::now();
     let fwd = ordering::order(kind, n, &k.col_ptr, &k.row_idx);
     let t_order = t.elapsed().as_secs_f64();
+    // Nested dissection orders on rayon's pool: its time on one thread too (the same
+    // permutation; AMD is sequential anyway).
+    let t_order_1 = if kind == Ordering::NestedDissection {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("pool");
+        let t = Instant::now();
+        let fwd1 = pool.install(|| ordering::order(kind, n, &k.col_ptr, &k.row_idx));
+        let t1 = t.elapsed().as_secs_f64();
+        assert!(
+            fwd1 == fwd,
+            "ND differs between 1 and {} threads",
+            rayon::current_num_threads()
+        );
+        t1
+    } else {
+        t_order
+    };
     let mut inv = vec![0usize; n];
     for (i, &o) in fwd.iter().enumerate() {
         inv[o] = i;
@@ -150,6 +171,7 @@ fn measure(level: usize, k: &UpperCsc, kind: Ordering, repeat: usize) -> Row {
         n,
         kind,
         t_order,
+        t_order_1,
         t_symbolic,
         t_numeric,
         nnz_l,
@@ -187,10 +209,10 @@ fn main() {
         md.push('\n');
     };
     line(
-        "| level | DOFs | ordering | order s | symbolic s | factorise s | nnz(L) | flops Σ colcount² |"
+        "| level | DOFs | ordering | order s | order s, 1 thread | symbolic s | factorise s | nnz(L) | flops Σ colcount² |"
             .into(),
     );
-    line("|---|---|---|---|---|---|---|---|".into());
+    line("|---|---|---|---|---|---|---|---|---|".into());
     let mut rows = Vec::new();
     for level in levels() {
         let path = repo.join(format!("meshes/vm272_L{level}.msh"));
@@ -205,11 +227,12 @@ fn main() {
         for kind in [Ordering::Amd, Ordering::NestedDissection] {
             let r = measure(level, &k, kind, repeat);
             line(format!(
-                "| L{} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {:.3e} |",
+                "| L{} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {} | {:.3e} |",
                 r.level,
                 r.n,
                 r.kind.name(),
                 r.t_order,
+                r.t_order_1,
                 r.t_symbolic,
                 r.t_numeric,
                 r.nnz_l,
@@ -237,7 +260,9 @@ fn main() {
         }
     }
     line(format!(
-        "\n(threads: {threads}, set STICKSLIP_THREADS; factorisation: faer supernodal LLᵀ, best of {repeat})"
+        "\n(threads: {threads}, set STICKSLIP_THREADS, for the factorisation and ND's ordering (AMD's is \
+         sequential); factorisation: faer supernodal LLᵀ, best of {repeat}; symbolic: faer's \
+         supernodal analysis with the given ordering)"
     ));
     let out = repo.join("out/bench");
     std::fs::create_dir_all(&out).expect("out/bench");

@@ -30,8 +30,10 @@
 //!    for cheap and eliminated first.
 //! 4. **Expansion**: each vertex's DOFs are numbered consecutively, in increasing order.
 //!
-//! Everything is sequential and depends only on the pattern: the same pattern gives the same
-//! permutation on every run and with any number of threads.
+//! The result depends only on the pattern: every cut is computed from its subgraph alone
+//! (with a fixed pseudo-random seed), so the same pattern gives the same permutation on every
+//! run and with any number of threads. The two parts of a large subgraph (and its
+//! components) are ordered in parallel on rayon's pool.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SymbolicSparseColMatRef;
@@ -138,6 +140,10 @@ impl Default for NdOptions {
 ///
 /// Entries with r > c are ignored; rows may be unsorted and repeated. See the module
 /// documentation for the algorithm.
+///
+/// # Panics
+/// If `col_ptr` has fewer than `n + 1` entries, if `n` does not fit in 32 bits, or if faer's
+/// AMD (on a leaf) runs out of memory.
 pub fn nested_dissection(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Vec<usize> {
     nested_dissection_with(n, col_ptr, row_idx, &NdOptions::default())
 }
@@ -155,22 +161,9 @@ pub fn nested_dissection_with(
     }
     let (g, dof_ptr, dofs) = compress(n, col_ptr, row_idx);
     let nv = g.n();
-    let mut pos = vec![u32::MAX; nv];
     let ids: Vec<u32> = (0..nv as u32).collect();
-    let mut lv = Leaves {
-        top: &g,
-        stamp: vec![0; nv],
-        loc: vec![0; nv],
-        tick: 0,
-    };
-    let mut stack: Vec<(Graph, Vec<u32>, usize)> = vec![(g.clone(), ids, 0)];
-    while let Some((sub, ids, off)) = stack.pop() {
-        dissect(sub, ids, off, opts, &mut pos, &mut stack, &mut lv);
-    }
-    let mut vorder = vec![u32::MAX; nv];
-    for v in 0..nv {
-        vorder[pos[v] as usize] = v as u32;
-    }
+    let vorder = dissect(g.clone(), ids, opts, &g);
+    debug_assert_eq!(vorder.len(), nv);
     let mut fwd = Vec::with_capacity(n);
     for &v in &vorder {
         let v = v as usize;
@@ -351,7 +344,8 @@ fn compress(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Compressed {
     );
     let col = |c: usize| &row_idx[col_ptr[c]..col_ptr[c + 1]];
     // Closed-neighbourhood hash and degree; distinct off-diagonal edges.
-    let mut h: Vec<u64> = (0..n as u64).map(mix).collect();
+    let hv: Vec<u64> = (0..n as u64).map(mix).collect();
+    let mut h = hv.clone();
     let mut deg = vec![0u32; n];
     let mut mark = vec![usize::MAX; n];
     let mut n_edges = 0u64;
@@ -364,8 +358,8 @@ fn compress(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Compressed {
             n_edges += 1;
             deg[r] += 1;
             deg[c] += 1;
-            h[r] = h[r].wrapping_add(mix(c as u64));
-            h[c] = h[c].wrapping_add(mix(r as u64));
+            h[r] = h[r].wrapping_add(hv[c]);
+            h[c] = h[c].wrapping_add(hv[r]);
         }
     }
     let mut idx: Vec<u32> = (0..n as u32).collect();
@@ -378,7 +372,7 @@ fn compress(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Compressed {
             rep[i as usize] = run[0];
         }
     }
-    drop((h, deg, idx));
+    drop((hv, h, deg, idx));
     if let Some(g) = quotient(n, col_ptr, row_idx, &rep, n_edges, &mut mark) {
         return g;
     }
@@ -451,6 +445,10 @@ fn quotient(
         }
     }
     drop(next);
+    // Sorted neighbour lists: the ordering does not depend on the order of the rows.
+    for v in 0..nv {
+        adj[xadj[v]..xadj[v + 1]].sort_unstable();
+    }
     // Exact check: every edge of the DOF graph is an edge of the blown-up vertex graph, and
     // the two have the same number of edges.
     if nv < n {
@@ -518,54 +516,62 @@ enum Cut {
     Separator(Vec<u8>),
 }
 
-/// Orders the graph `g` (vertices `ids` of the compressed graph) into positions
-/// `off..off + g.n()`, pushing the subgraphs it is cut into onto `stack`.
-fn dissect(
-    g: Graph,
-    ids: Vec<u32>,
-    off: usize,
-    opts: &NdOptions,
-    pos: &mut [u32],
-    stack: &mut Vec<(Graph, Vec<u32>, usize)>,
-    lv: &mut Leaves,
-) {
+/// Subgraphs of at least this many vertices have their parts ordered in parallel (the
+/// result does not depend on it).
+const PARALLEL_MIN: usize = 4096;
+
+/// The nested-dissection order of the graph `g`, whose vertices are the vertices `ids`
+/// (increasing) of the whole compressed graph `top`: those ids in elimination order.
+fn dissect(g: Graph, ids: Vec<u32>, opts: &NdOptions, top: &Graph) -> Vec<u32> {
     let n = g.n();
     if n <= opts.leaf_size.max(3) {
-        leaf(&g, &ids, off, pos, lv);
-        return;
+        return leaf(&g, &ids, top);
     }
     let to_ids = |l: Vec<u32>| l.iter().map(|&v| ids[v as usize]).collect::<Vec<u32>>();
     match bisect(&g, opts) {
         Cut::Components(comp, ncomp) => {
-            let mut o = off;
-            for (sub, local) in g.split(&comp, ncomp) {
-                let len = local.len();
-                stack.push((sub, to_ids(local), o));
-                o += len;
-            }
+            let subs: Vec<(Graph, Vec<u32>)> = g
+                .split(&comp, ncomp)
+                .into_iter()
+                .map(|(sub, local)| (sub, to_ids(local)))
+                .collect();
+            drop(g);
+            let orders: Vec<Vec<u32>> = if n >= PARALLEL_MIN {
+                use rayon::prelude::*;
+                subs.into_par_iter()
+                    .map(|(sub, sub_ids)| dissect(sub, sub_ids, opts, top))
+                    .collect()
+            } else {
+                subs.into_iter()
+                    .map(|(sub, sub_ids)| dissect(sub, sub_ids, opts, top))
+                    .collect()
+            };
+            orders.concat()
         }
         Cut::Separator(side) => {
             let na = side.iter().filter(|&&s| s == A).count();
             let nb = side.iter().filter(|&&s| s == B).count();
             if na == 0 || nb == 0 {
                 // No cut was found: a leaf after all.
-                leaf(&g, &ids, off, pos, lv);
-                return;
+                return leaf(&g, &ids, top);
             }
-            let mut k = off + na + nb;
-            for v in 0..n {
-                if side[v] == SEP {
-                    pos[ids[v] as usize] = k as u32;
-                    k += 1;
-                }
-            }
+            let sep: Vec<u32> = (0..n).filter(|&v| side[v] == SEP).map(|v| ids[v]).collect();
             let part: Vec<u32> = side.iter().map(|&s| s as u32).collect();
             let mut parts = g.split(&part, 2);
             drop(g);
             let (gb, lb) = parts.pop().unwrap();
             let (ga, la) = parts.pop().unwrap();
-            stack.push((gb, to_ids(lb), off + na));
-            stack.push((ga, to_ids(la), off));
+            let (ia, ib) = (to_ids(la), to_ids(lb));
+            let (oa, ob) = if n >= PARALLEL_MIN {
+                rayon::join(|| dissect(ga, ia, opts, top), || dissect(gb, ib, opts, top))
+            } else {
+                (dissect(ga, ia, opts, top), dissect(gb, ib, opts, top))
+            };
+            let mut out = Vec::with_capacity(n);
+            out.extend_from_slice(&oa);
+            out.extend_from_slice(&ob);
+            out.extend_from_slice(&sep);
+            out
         }
     }
 }
@@ -682,6 +688,7 @@ fn coarsen(g: &Graph, maxvw: u64, seed: &mut u64) -> (Graph, Vec<u32>) {
         let j = (((next_random(seed) >> 32) * (i as u64 + 1)) >> 32) as usize;
         perm.swap(i, j);
     }
+    let unit = g.ew.is_empty();
     let mut mate = vec![NONE; n];
     for &v in &perm {
         let v = v as usize;
@@ -695,6 +702,9 @@ fn coarsen(g: &Graph, maxvw: u64, seed: &mut u64) -> (Graph, Vec<u32>) {
             if mate[u] == NONE && g.ew(k) > best_w && g.vw[v] as u64 + g.vw[u] as u64 <= maxvw {
                 best = u;
                 best_w = g.ew(k);
+                if unit {
+                    break; // all edges weigh 1: the first free neighbour is a heaviest
+                }
             }
         }
         mate[v] = best as u32;
@@ -836,7 +846,7 @@ fn initial_separators(g: &Graph, maxpw: i64, opts: &NdOptions) -> Vec<Vec<u8>> {
             all.push((score(&part_weights(g, &side), maxpw), t, side.clone()));
         }
     }
-    all.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+    all.sort_by_key(|a| (a.0, a.1));
     all.into_iter().map(|a| a.2).collect()
 }
 
@@ -1188,54 +1198,42 @@ fn refine(
     score(pw, maxpw)
 }
 
-/// Leaf ordering context: the whole compressed graph, to see each leaf's halo.
-struct Leaves<'a> {
-    top: &'a Graph,
-    stamp: Vec<u32>,
-    loc: Vec<u32>,
-    tick: u32,
-}
-
-/// Orders `g` (vertices `ids` of the compressed graph) by faer's AMD on its pattern together
-/// with its halo: the vertices of earlier separators next to it, joined into a clique (they
-/// are eliminated after it). Without them, the leaf's boundary vertices would look cheap and
-/// be eliminated first, filling the leaf's interior with the separators.
-fn leaf(g: &Graph, ids: &[u32], off: usize, pos: &mut [u32], lv: &mut Leaves) {
+/// Orders `g` (vertices `ids`, increasing, of the compressed graph `top`) by faer's AMD on
+/// its pattern together with its halo: the vertices of earlier separators next to it, joined
+/// into a clique (they are eliminated after it). Without them, the leaf's boundary vertices
+/// would look cheap and be eliminated first, filling the leaf's interior with the separators.
+/// Returns `ids` in elimination order.
+fn leaf(g: &Graph, ids: &[u32], top: &Graph) -> Vec<u32> {
     const MAX_CLIQUE: usize = 512;
     let m = g.n();
-    lv.tick += 1;
-    let t = lv.tick;
-    for (i, &v) in ids.iter().enumerate() {
-        lv.stamp[v as usize] = t;
-        lv.loc[v as usize] = i as u32;
-    }
+    let inside = |u: u32| ids.binary_search(&u).ok();
     let mut halo: Vec<u32> = Vec::new();
     for &v in ids {
-        for &u in lv.top.nbrs(v as usize) {
-            if lv.stamp[u as usize] != t {
-                lv.stamp[u as usize] = t;
-                lv.loc[u as usize] = (m + halo.len()) as u32;
-                halo.push(u);
-            }
-        }
+        halo.extend(
+            top.nbrs(v as usize)
+                .iter()
+                .filter(|&&u| inside(u).is_none()),
+        );
     }
+    halo.sort_unstable();
+    halo.dedup();
     let h = halo.len();
     let total = m + h;
     let mut col_ptr = Vec::with_capacity(total + 1);
-    let mut row_idx = Vec::with_capacity(g.adj.len() / 2 + 4 * h);
+    let clique = if h <= MAX_CLIQUE {
+        h * h.saturating_sub(1) / 2
+    } else {
+        0
+    };
+    let mut row_idx = Vec::with_capacity(g.adj.len() / 2 + 8 * h + clique);
     col_ptr.push(0usize);
     for c in 0..m {
         row_idx.extend(g.nbrs(c).iter().map(|&u| u as usize).filter(|&u| u < c));
         col_ptr.push(row_idx.len());
     }
     for (j, &x) in halo.iter().enumerate() {
-        for &u in lv.top.nbrs(x as usize) {
-            let l = lv.loc[u as usize] as usize;
-            if lv.stamp[u as usize] == t && l < m {
-                row_idx.push(l);
-            }
-        }
-        if h <= MAX_CLIQUE {
+        row_idx.extend(top.nbrs(x as usize).iter().filter_map(|&u| inside(u)));
+        if clique > 0 {
             row_idx.extend(m..m + j);
         }
         col_ptr.push(row_idx.len());
@@ -1245,7 +1243,32 @@ fn leaf(g: &Graph, ids: &[u32], off: usize, pos: &mut [u32], lv: &mut Leaves) {
     } else {
         amd_order(total, &col_ptr, &row_idx)
     };
-    for (k, &i) in fwd.iter().filter(|&&i| i < m).enumerate() {
-        pos[ids[i] as usize] = (off + k) as u32;
+    fwd.iter().filter(|&&i| i < m).map(|&i| ids[i]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The exact check of the compression refuses a grouping of DOFs that are not
+    /// indistinguishable, and accepts one that is.
+    #[test]
+    fn quotient_checks_the_grouping() {
+        // Path 0 - 1 - 2: 0 and 2 have the same open neighbourhood, not the same closed one.
+        let (cp, ri) = (vec![0, 1, 3, 5], vec![0, 0, 1, 1, 2]);
+        let mut mark = vec![0; 3];
+        assert!(quotient(3, &cp, &ri, &[0, 1, 0], 2, &mut mark).is_none());
+        assert!(quotient(3, &cp, &ri, &[0, 1, 2], 2, &mut mark).is_some());
+        // Triangle 0 - 1 - 2 plus 3 attached to all: 0, 1, 2, 3 all indistinguishable.
+        let (cp, ri) = (vec![0, 1, 3, 6, 10], vec![0, 0, 1, 0, 1, 2, 0, 1, 2, 3]);
+        let mut mark = vec![0; 4];
+        let (g, dof_ptr, dofs) = quotient(4, &cp, &ri, &[0, 0, 0, 0], 6, &mut mark).unwrap();
+        assert_eq!(
+            (g.n(), g.adj.len(), dof_ptr, dofs),
+            (1, 0, vec![0, 4], vec![0, 1, 2, 3])
+        );
+        // The hash grouping finds it.
+        let (g, _, _) = compress(4, &cp, &ri);
+        assert_eq!(g.vw, vec![4]);
     }
 }
