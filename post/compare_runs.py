@@ -17,7 +17,7 @@ import json
 import os
 import sys
 
-TIMING_KEYS = {"timings_s", "contact_solve_s", "peak_memory_mib", "wall_s", "output_dir",
+TIMING_KEYS = {"timings_s", "contact_solve_s", "contact_phases_s", "peak_memory_mib", "wall_s", "output_dir",
                "build_s", "sweep_s", "runs", "t_solve", "t_contact", "cache"}
 
 

@@ -246,7 +246,7 @@ pub fn build_id() -> Result<u64, String> {
 }
 
 /// The key of a model's linear algebra: the cache format, the program version and build
-/// ([`build_id`]), the ordering, the bytes of the mesh file, the bodies (group, E, ν) in
+/// ([`build_id`]), the ordering policy, the bytes of the mesh file, the bodies (group, E, ν) in
 /// order, the supports (group, ux, uy) in order, the pilot's group, and the contact pair
 /// (slave, master, the candidate gap in use, the normal kind). Nothing else changes `K`, the
 /// constraint rows or the loads of the prescribed displacements: not the friction law, the
@@ -259,7 +259,7 @@ pub fn model_key(case: &Case, mesh_bytes: &[u8], gap: Option<f64>) -> Result<Key
     k.u64(FORMAT as u64);
     k.str(env!("CARGO_PKG_VERSION"));
     k.u64(build_id()?);
-    k.str(crate::linsolve::ordering_choice().name());
+    k.str(crate::linsolve::ordering_policy());
     k.bytes(mesh_bytes);
     k.u64(case.bodies.len() as u64);
     for b in &case.bodies {

@@ -358,12 +358,29 @@ fn order_leading(
     Ok(fwd)
 }
 
-/// The ordering of the free DOFs of a contact model: AMD, or nested dissection with the
-/// environment variable `STICKSLIP_ORDERING=nd` (an experimental switch for the comparison in
-/// docs/benchmarks.md; part of the model cache's key).
-pub fn ordering_choice() -> crate::ordering::Ordering {
+/// Free DOFs from which a contact model's DOFs are ordered by nested dissection rather than
+/// AMD: below it AMD's cheaper ordering wins, above it nested dissection's smaller factor does
+/// (`cargo bench --bench scaling` with `STICKSLIP_ORDERING`; docs/benchmarks.md).
+pub const ND_FROM: usize = 250_000;
+
+/// The ordering policy: `auto` (AMD below [`ND_FROM`] free DOFs, nested dissection from it),
+/// or forced by the environment variable `STICKSLIP_ORDERING=amd` or `=nd` (for the
+/// comparison in docs/benchmarks.md). Part of the model cache's key.
+pub fn ordering_policy() -> &'static str {
     match std::env::var("STICKSLIP_ORDERING").as_deref() {
-        Ok("nd") => crate::ordering::Ordering::NestedDissection,
+        Ok("nd") => "nd",
+        Ok("amd") => "amd",
+        _ => "auto",
+    }
+}
+
+/// The ordering of the free DOFs of a contact model with `n` free DOFs under
+/// [`ordering_policy`].
+pub fn ordering_choice(n: usize) -> crate::ordering::Ordering {
+    match ordering_policy() {
+        "nd" => crate::ordering::Ordering::NestedDissection,
+        "amd" => crate::ordering::Ordering::Amd,
+        _ if n >= ND_FROM => crate::ordering::Ordering::NestedDissection,
         _ => crate::ordering::Ordering::Amd,
     }
 }
@@ -378,7 +395,7 @@ impl SaddleSymbolic {
         row_idx: &[usize],
         y_rows: &[Vec<(usize, f64)>],
     ) -> Result<SaddleSymbolic, FactorError> {
-        let fwd = match ordering_choice() {
+        let fwd = match ordering_choice(n) {
             crate::ordering::Ordering::Amd => order_leading(n, col_ptr, row_idx, n + y_rows.len())?,
             crate::ordering::Ordering::NestedDissection => {
                 crate::ordering::nested_dissection(n, col_ptr, row_idx)
@@ -572,6 +589,24 @@ impl SaddleSymbolic {
 
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 
+/// `Σ a_i b_i` in four interleaved partial sums (which the compiler vectorises).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    for (x, y) in ca.zip(cb) {
+        for k in 0..4 {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
 impl SaddleFactor {
     /// The values of the factor (shared, not copied).
     pub fn values(&self) -> std::sync::Arc<Vec<f64>> {
@@ -602,70 +637,64 @@ impl SaddleFactor {
         // diagonal blocks; read it through the same accessor.
         let lref = SupernodalLltRef::new(sn, &self.values);
         let nsup = sn.n_supernodes();
+        // Per supernode of K: its first column, the columns of K in it, the pattern rows of K
+        // (the constraint rows come last in every pattern) and a view of its values.
+        let nodes: Vec<_> = (0..nsup)
+            .map(|s| lref.supernode(s))
+            .take_while(|node| node.start() < n)
+            .map(|node| {
+                let pat = node.pattern();
+                debug_assert!(pat.windows(2).all(|p| p[0] < p[1]));
+                let kp = pat.partition_point(|&r| r < n);
+                (node.start(), (node.val().ncols()).min(n - node.start()), kp, node)
+            })
+            .collect();
+        let mut t = Vec::new();
         for j in 0..ncols {
             let x = &mut x[j * size..(j + 1) * size];
-            // Forward: L_KK y = b.
-            for s in 0..nsup {
-                let node = lref.supernode(s);
-                let (start, v, pat) = (node.start(), node.val(), node.pattern());
-                let w = v.ncols();
-                if start >= n {
-                    break;
-                }
-                for c in 0..w {
-                    let col = start + c;
-                    if col >= n {
-                        break;
-                    }
-                    let xc = x[col];
+            // Forward: L_KK y = b; the off-diagonal rows of a supernode are gathered into `t`
+            // and scattered once.
+            for (start, wk, kp, node) in &nodes {
+                let (v, pat, w) = (node.val(), &node.pattern()[..*kp], node.val().ncols());
+                t.clear();
+                t.resize(*kp, 0.0);
+                for c in 0..*wk {
+                    let xc = x[start + c];
                     if xc == 0.0 {
                         continue;
                     }
-                    for r in c + 1..w {
-                        x[start + r] -= v[(r, c)] * xc;
+                    let col = v.col(c).try_as_col_major().expect("column-major").as_slice();
+                    for r in c + 1..*wk {
+                        x[start + r] -= col[r] * xc;
                     }
-                    for (k, &row) in pat.iter().enumerate() {
-                        if row < n {
-                            x[row] -= v[(w + k, c)] * xc;
-                        }
+                    for (tk, lk) in t.iter_mut().zip(&col[w..w + kp]) {
+                        *tk += lk * xc;
                     }
+                }
+                for (&row, tk) in pat.iter().zip(&t) {
+                    x[row] -= tk;
                 }
             }
             // D.
-            for s in 0..nsup {
-                let node = lref.supernode(s);
-                let (start, v) = (node.start(), node.val());
-                for c in 0..v.ncols() {
-                    if start + c < n {
-                        x[start + c] /= v[(c, c)];
-                    }
+            for (start, wk, _, node) in &nodes {
+                let v = node.val();
+                for c in 0..*wk {
+                    x[start + c] /= v[(c, c)];
                 }
             }
-            // Backward: L_KKᵀ x = y.
-            for s in (0..nsup).rev() {
-                let node = lref.supernode(s);
-                let (start, v, pat) = (node.start(), node.val(), node.pattern());
-                let w = v.ncols();
-                if start >= n {
-                    continue;
-                }
-                for c in (0..w).rev() {
-                    let col = start + c;
-                    if col >= n {
-                        continue;
+            // Backward: L_KKᵀ x = y; the pattern's values gathered into `t` once.
+            for (start, wk, kp, node) in nodes.iter().rev() {
+                let (v, pat, w) = (node.val(), &node.pattern()[..*kp], node.val().ncols());
+                t.clear();
+                t.extend(pat.iter().map(|&row| x[row]));
+                for c in (0..*wk).rev() {
+                    let col = v.col(c).try_as_col_major().expect("column-major").as_slice();
+                    let mut acc = x[start + c];
+                    for r in c + 1..*wk {
+                        acc -= col[r] * x[start + r];
                     }
-                    let mut acc = x[col];
-                    for r in c + 1..w {
-                        if start + r < n {
-                            acc -= v[(r, c)] * x[start + r];
-                        }
-                    }
-                    for (k, &row) in pat.iter().enumerate() {
-                        if row < n {
-                            acc -= v[(w + k, c)] * x[row];
-                        }
-                    }
-                    x[col] = acc;
+                    acc -= dot(&col[w..w + kp], &t);
+                    x[start + c] = acc;
                 }
             }
         }

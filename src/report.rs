@@ -88,6 +88,8 @@ pub struct Summary {
     pub timings_s: crate::model::Timings,
     /// Time in the contact iterations (part of `timings_s.solve`).
     pub contact_solve_s: f64,
+    /// Its parts in the structured solve (see [`crate::contact::solver::SolveTimings`]).
+    pub contact_phases_s: crate::contact::solver::SolveTimings,
     pub newton_iterations: usize,
     /// Dense factorisations and GMRES iterations of the contact Newton solves.
     pub lu_factorisations: usize,
@@ -394,6 +396,7 @@ pub fn summarise(
         lu_factorisations,
         gmres_iterations,
         contact_solve_s,
+        contact_phases_s,
         last_u,
         last_state,
         last_scale,
@@ -437,6 +440,7 @@ pub fn summarise(
         threads: rayon::current_num_threads(),
         timings_s: model.timings.clone(),
         contact_solve_s,
+        contact_phases_s,
         newton_iterations,
         lu_factorisations,
         gmres_iterations,

@@ -2,9 +2,10 @@
 //! (`state_NNNN.json`: the driver's [`Checkpoint`] with the contact state, slip history and
 //! stage position; the `.pvd` entries so far; the energy balance so far) under an identity of
 //! the case file, its mesh and the program version. `stickslip run CASE --resume PATH` goes on
-//! from such a state and writes what the uninterrupted run writes (timings apart): the driver
-//! forgets the contact solver's cached factorisations at every checkpoint, so both runs compute
-//! the steps after it from the same state with the same arithmetic.
+//! from such a state and writes what the uninterrupted run writes (timings apart): at every
+//! checkpoint the contact solver keeps only the factorisations the state records how to rebuild
+//! (the Delassus block and the batches of columns solved from it), and the resumed run rebuilds
+//! them, so both runs compute the steps after it from the same state with the same arithmetic.
 
 use crate::case::Case;
 use crate::driver::Checkpoint;
@@ -15,7 +16,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// Version of the state file layout.
-pub const FORMAT: u32 = 1;
+pub const FORMAT: u32 = 2;
 
 /// What `state_NNNN.json` holds.
 #[derive(Serialize, Deserialize)]

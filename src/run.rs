@@ -163,10 +163,12 @@ pub fn run_model(
         from,
     };
     // The steps are written on a thread of their own while the next ones are solved.
-    let (sim, t_write, t_wait) = std::thread::scope(|scope| {
+    let (summarised, history, solve_s, t_write, t_wait) = std::thread::scope(|scope| {
         let mut writer = Background::spawn(scope, series);
         // The last converged step not yet written (`output.every` > 1).
         let mut unwritten: Option<StepOutput> = None;
+        // The last step and its recovered displacements (runs with contact).
+        let mut last_u: Option<(usize, Vec<f64>)> = None;
         let mut on_step = |ev: &StepEvent| {
             progress.step(ev);
             if let Some(m) = energy.as_mut() {
@@ -177,11 +179,22 @@ pub fn run_model(
             }
             // A write that failed stops the run at its next step.
             writer.check()?;
+            // The last step's displacements are recovered here, once, for its output and
+            // for the checks of the summary, while the writer is still busy with the steps
+            // before it.
+            let u = match (ev.u, ev.contact) {
+                (None, Some(st)) if ev.last => {
+                    let u = model.contact_displacement(ev.scale, st);
+                    last_u = Some((ev.step, u.clone()));
+                    Some(u)
+                }
+                _ => ev.u.cloned(),
+            };
             let out = StepOutput {
                 step: ev.step,
                 time: ev.time,
                 scale: ev.scale,
-                u: ev.u.cloned(),
+                u,
                 contact: ev.contact.cloned(),
                 // The state to resume from, written after the step's files.
                 state: ev.checkpoint.map(|c| SavedRun {
@@ -214,18 +227,28 @@ pub fn run_model(
         {
             writer.send(w)?;
         }
+        // The summary and its checks (a recovery solve of their own) while the writer writes
+        // the last steps.
+        let mut sim = sim;
+        if let Some((step, u)) = last_u
+            && sim.last_u.is_none()
+            && sim.records.len() == step
+        {
+            sim.last_u = Some(u);
+        }
+        let solve_s = sim.solve_s;
+        let history = history_csv(&sim.records);
+        let summarised = summarise(&model, case, case_path, out_dir, sim);
         let (t_write, t_wait) = writer.finish()?;
-        Ok((sim, t_write, t_wait))
+        Ok((summarised, history, solve_s, t_write, t_wait))
     })?;
     progress.finish();
-    model.timings.solve = sim.solve_s;
+    write_file(&out_dir.join("history.csv"), history.as_bytes())?;
+    let (mut summary, failure, lost_equilibrium) = summarised;
+    model.timings.solve = solve_s;
     model.timings.write = t_write;
     model.timings.write_wait = t_wait;
-    write_file(
-        &out_dir.join("history.csv"),
-        history_csv(&sim.records).as_bytes(),
-    )?;
-    let (mut summary, failure, lost_equilibrium) = summarise(&model, case, case_path, out_dir, sim);
+    summary.timings_s = model.timings.clone();
     if let Some(m) = &energy {
         write_file(&out_dir.join("energy.csv"), m.csv().as_bytes())?;
         summary.energy = m.summary();

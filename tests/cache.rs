@@ -10,11 +10,12 @@ use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
 /// Keys that measure how the run went rather than what it computed.
-const TIMING_KEYS: [&str; 8] = [
+const TIMING_KEYS: [&str; 9] = [
     "t_solve",
     "t_contact",
     "timings_s",
     "contact_solve_s",
+    "contact_phases_s",
     "peak_memory_mib",
     "wall_s",
     "output_dir",

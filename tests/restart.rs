@@ -9,10 +9,11 @@ use common::{mesh_path, shipped_case, stickslip, tempdir, validation_row};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
-const TIMING_KEYS: [&str; 8] = [
+const TIMING_KEYS: [&str; 9] = [
     "cache",
     "timings_s",
     "contact_solve_s",
+    "contact_phases_s",
     "peak_memory_mib",
     "wall_s",
     "output_dir",

@@ -138,8 +138,12 @@ impl ContactModel {
         }
     }
 
-    /// `w0 = Y K̂⁻¹ f` for a free load vector `f`.
+    /// `w0 = Y K̂⁻¹ f` for a free load vector `f` (zero without a solve when `f` is zero, as
+    /// the loads of zero prescribed displacements or of no tractions are).
     pub fn w0(&self, cond: &crate::condense::Condensed, f: &[f64]) -> Vec<f64> {
+        if f.iter().all(|v| *v == 0.0) {
+            return vec![0.0; self.y_rows.len()];
+        }
         let mut x = f.to_vec();
         cond.chol.solve_in_place(&mut x);
         self.y_rows

@@ -60,6 +60,8 @@ pub struct Simulation {
     pub gmres_iterations: usize,
     pub solve_s: f64,
     pub contact_solve_s: f64,
+    /// Seconds in the parts of the structured contact solve (this process's share).
+    pub contact_phases_s: solver::SolveTimings,
     /// The last converged step: its free solution (runs without contact), contact state and
     /// traction scale.
     pub last_u: Option<Vec<f64>>,
@@ -83,9 +85,10 @@ pub fn simulate(
 /// Checkpoints of a run and where it resumes.
 #[derive(Default)]
 pub struct Restart {
-    /// Hand a [`Checkpoint`] to the caller with every `n`-th step (and the last), and forget
-    /// the contact solver's cached factorisations after it, so that a run resumed from it
-    /// computes bit for bit what the uninterrupted run computes.
+    /// Hand a [`Checkpoint`] to the caller with every `n`-th step (and the last). The contact
+    /// solver keeps from its cache only what the checkpoint records and a resumed run rebuilds
+    /// (see [`solver::BlockRecord`]), so that a run resumed from it computes bit for bit what the
+    /// uninterrupted run computes.
     pub every: Option<usize>,
     /// Resume from this checkpoint instead of the unloaded state.
     pub from: Option<Checkpoint>,
@@ -107,6 +110,9 @@ pub struct Checkpoint {
     newton_total: usize,
     factorisations: usize,
     gmres_iterations: usize,
+    /// The contact solver's factorised Delassus block, for the resumed run to rebuild.
+    #[serde(default)]
+    contact_block: Option<solver::BlockRecord>,
     bracket: Option<(f64, f64)>,
     pub last_u: Option<Vec<f64>>,
     t_solve: f64,
@@ -168,6 +174,7 @@ pub fn simulate_with(
         gmres_iterations: d.lu_cache.gmres_iterations,
         solve_s: d.t_solve,
         contact_solve_s: d.t_contact,
+        contact_phases_s: d.lu_cache.timings,
         last_u: d.last_u,
         last_state: if d.records.is_empty() { None } else { d.cstate },
         last_scale: d.scale,
@@ -360,6 +367,9 @@ impl Driver<'_> {
                 .checkpoint_every
                 .filter(|n| step.is_multiple_of(*n) || last)
                 .map(|_| Checkpoint {
+                    // A resumed run starts from the factorisations it can rebuild bit for bit:
+                    // so does this one.
+                    contact_block: self.lu_cache.checkpoint(),
                     stage: si,
                     start,
                     alpha,
@@ -388,10 +398,6 @@ impl Driver<'_> {
                 record: self.records.last().expect("pushed above"),
                 checkpoint: checkpoint.as_ref(),
             })?;
-            if checkpoint.is_some() {
-                // A resumed run starts with no cached factorisation: so does this one.
-                self.lu_cache.clear();
-            }
         }
         Ok(true)
     }
@@ -499,6 +505,11 @@ impl Driver<'_> {
         self.newton_total = c.newton_total;
         self.lu_cache.factorisations = c.factorisations;
         self.lu_cache.gmres_iterations = c.gmres_iterations;
+        if let (Some(rec), Some(cm)) = (&c.contact_block, &self.model.contact) {
+            // A block that does not factorise leaves the cache empty: the solves still
+            // converge, though not bit for bit as the uninterrupted run.
+            self.lu_cache.replay(&cm.system.w, rec);
+        }
         self.bracket = c.bracket;
         self.last_u = c.last_u;
         self.t_solve = c.t_solve;

@@ -91,6 +91,9 @@ pub struct NewtonRows {
     pub b: Vec<f64>,
     /// The rows that differ from `K` (slip nodes, force-driven anchors), in increasing order.
     pub special: Vec<SpecialRow>,
+    /// Rows (positions in `unk`) likely to become special: the tangential rows of stick nodes,
+    /// nearest their friction limit `|F_t| / (μ F_n)` first.
+    pub likely: Vec<usize>,
 }
 
 /// Row `row` of a [`NewtonRows`] matrix: `α e_row + β K_row + γ e_col`, or, when `combo` is
@@ -371,7 +374,24 @@ impl ContactSystem {
             });
         }
         let b = equations.iter().map(|e| e.rhs).collect();
-        Some(NewtonRows { unk, b, special })
+        let mut near: Vec<(f64, usize)> = Vec::new();
+        if let Some(law) = it.law {
+            let ns = self.ns;
+            for j in (0..ns).filter(|&j| it.status[j] == Status::Stick) {
+                let limit = law.mu(it.prev.slip_mu[j]) * it.mu[j];
+                if limit > 0.0 && pos[ns + j] != usize::MAX {
+                    near.push((it.mu[ns + j].abs() / limit, pos[ns + j]));
+                }
+            }
+        }
+        near.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let likely = near.into_iter().map(|(_, r)| r).collect();
+        Some(NewtonRows {
+            unk,
+            b,
+            special,
+            likely,
+        })
     }
 
     /// The residual of the equations of every method for the fixed sets of `it` (unlinearised:

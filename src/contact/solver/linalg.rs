@@ -5,6 +5,14 @@
 use super::{NewtonRows, SpecialRow};
 use faer::Mat;
 use faer::linalg::solvers::Solve;
+use std::time::Instant;
+
+/// `x += a g`.
+fn axpy(x: &mut [f64], a: f64, g: &[f64]) {
+    for (xi, gi) in x.iter_mut().zip(g) {
+        *xi += a * gi;
+    }
+}
 
 /// Solves `A x = b` by a fresh LU; `None` when `A` is numerically singular.
 pub(super) fn solve_dense(a: &Mat<f64>, b: &Mat<f64>) -> Option<Mat<f64>> {
@@ -48,10 +56,46 @@ pub struct LuCache {
     k_pos: Vec<usize>,
     k_llt: Option<faer::linalg::solvers::Llt<f64>>,
     k_cols: Vec<Vec<f64>>,
+    /// The right-hand side `b̃` (by position in `K`) of the last direct solve with the factor
+    /// and `x̃ = K⁻¹ b̃` (empty: none since the factorisation or the last checkpoint).
+    bt: Vec<f64>,
+    xt: Vec<f64>,
+    /// The batches of columns of `G` solved for since `K` was factorised (positions in `K`),
+    /// in order: with `k_unk`, what a resumed run replays to reach the same factors.
+    batches: Vec<Vec<usize>>,
     /// Factorisations done (of `K` or of a dense Newton matrix) and GMRES iterations spent (for
     /// the run summary).
     pub factorisations: usize,
     pub gmres_iterations: usize,
+    /// Seconds spent in each part of the structured solve (for the run summary).
+    pub timings: SolveTimings,
+}
+
+/// Seconds spent in the parts of the structured contact solve, summed over a run.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct SolveTimings {
+    /// Cholesky factorisations of Delassus blocks `K`.
+    pub factorise: f64,
+    /// Columns `K⁻¹ e_q` of the rows that differ from `K`.
+    pub columns: f64,
+    /// Direct solves with the factor (one per load step, or when a plain row's right-hand side
+    /// changes).
+    pub direct: f64,
+    /// The capacitance system and the Woodbury correction.
+    pub woodbury: f64,
+    /// Products with `W` for the rows outside the system.
+    pub products: f64,
+}
+
+/// The factorised Delassus block and the columns of `G` computed from it, by what produced
+/// them: saved with a restart state, so that a resumed run factorises the same block and
+/// solves for the same columns in the same batches (the same arithmetic, hence the same bits).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BlockRecord {
+    /// μ indices of the block's unknowns.
+    pub unk: Vec<usize>,
+    /// Positions in the block of the columns solved for, batch by batch.
+    pub batches: Vec<Vec<usize>>,
 }
 
 /// Contact systems with fewer candidate unknowns than this are solved through the dense Newton
@@ -60,6 +104,12 @@ pub struct LuCache {
 /// the round-off in forces that are zero in exact arithmetic): the dense path keeps the
 /// rounding of the reference solve for them.
 pub(super) const STRUCTURED_MIN: usize = 64;
+
+/// Columns of `G` solved for ahead of need with each batch: those of the stick nodes nearest
+/// their friction limit, which are the next to slip as a tangential load grows. A solve with
+/// the cached factor reads the whole factor (tens of MB at L7) whatever the number of
+/// right-hand sides, so a few dozen columns cost little more than one.
+const PREFETCH: usize = 32;
 
 /// GMRES iterations before giving up on the cached factorisation and refactorising.
 const GMRES_MAX: usize = 12;
@@ -73,6 +123,39 @@ impl LuCache {
         self.k_unk.clear();
         self.k_pos.clear();
         self.k_cols.clear();
+        self.bt.clear();
+        self.xt.clear();
+        self.batches.clear();
+    }
+
+    /// At a checkpoint: forgets what a resumed run could not rebuild bit for bit (the dense
+    /// LU and the last direct solve) and returns what it can (see [`BlockRecord`]).
+    pub fn checkpoint(&mut self) -> Option<BlockRecord> {
+        self.lu = None;
+        self.unk.clear();
+        self.bt.clear();
+        self.xt.clear();
+        self.k_llt.as_ref().map(|_| BlockRecord {
+            unk: self.k_unk.clone(),
+            batches: self.batches.clone(),
+        })
+    }
+
+    /// Rebuilds the state [`Self::checkpoint`] recorded: factorises the same block of `w` and
+    /// solves for the same columns in the same batches. The work is not counted in the
+    /// factorisations (the uninterrupted run counted it once). `false` if the block does not
+    /// factorise (the record is not from this model).
+    pub fn replay(&mut self, w: &Mat<f64>, rec: &BlockRecord) -> bool {
+        let count = self.factorisations;
+        let ok = self.factorise_block(w, &rec.unk).is_some()
+            && rec.batches.iter().all(|b| {
+                b.iter().all(|&q| q < self.k_unk.len()) && self.solve_columns(b.clone()).is_some()
+            });
+        self.factorisations = count;
+        if !ok {
+            self.clear();
+        }
+        ok
     }
 
     /// Solves the structured Newton system `rows` (see [`super::ContactSystem::newton_rows`]) with the
@@ -116,21 +199,56 @@ impl LuCache {
         let left = self.k_unk.len().saturating_sub(rows.unk.len());
         let limit = self.k_unk.len() / if new_step { 64 } else { 4 };
         if !covered || left > limit {
-            self.factorise_block(w, &rows.unk)?;
+            let t = Instant::now();
+            let done = self.factorise_block(w, &rows.unk);
+            self.timings.factorise += t.elapsed().as_secs_f64();
+            done?;
         }
         let nk = self.k_unk.len();
         let (b, special) = self.on_block(rows);
-        self.solve_g_columns(&special)?;
-        let llt = self.k_llt.as_ref()?;
-        let mut x0 = Mat::from_fn(nk, 1, |i, _| b[i]);
-        llt.solve_in_place(&mut x0);
-        let mut x: Vec<f64> = x0.col(0).iter().copied().collect();
+        let likely: Vec<usize> = rows.likely.iter().map(|&r| self.k_pos[rows.unk[r]]).collect();
+        let t = Instant::now();
+        let cols = self.solve_g_columns(&special, &likely);
+        self.timings.columns += t.elapsed().as_secs_f64();
+        cols?;
+        // x0 = K⁻¹ b. The rows of K keep their right-hand side through the iterations of a
+        // step, so with b = b̃ + E_P d (d nonzero on special rows only) x0 = x̃ + G d from the
+        // last direct solve x̃ = K⁻¹ b̃ and the columns of G: no pass over the factor.
+        let t = Instant::now();
+        let mut is_special = vec![false; nk];
+        for s in &special {
+            is_special[s.row] = true;
+        }
+        let reuse = self.xt.len() == nk
+            && (0..nk).all(|q| is_special[q] || b[q].to_bits() == self.bt[q].to_bits());
+        if !reuse {
+            let llt = self.k_llt.as_ref()?;
+            let mut x0 = Mat::from_fn(nk, 1, |i, _| b[i]);
+            llt.solve_in_place(&mut x0);
+            self.bt = b.clone();
+            self.xt = x0.col(0).iter().copied().collect();
+        }
+        let mut x = self.xt.clone();
+        if reuse {
+            for s in &special {
+                let d = b[s.row] - self.bt[s.row];
+                if d != 0.0 {
+                    axpy(&mut x, d, &self.k_cols[s.row]);
+                }
+            }
+        }
+        self.timings.direct += t.elapsed().as_secs_f64();
+        let t = Instant::now();
         let y_cap = if special.is_empty() {
             Vec::new()
         } else {
-            self.woodbury_correction(&special, &b, &mut x)?
+            let y = self.woodbury_correction(&special, &b, &mut x);
+            self.timings.woodbury += t.elapsed().as_secs_f64();
+            y?
         };
+        let t = Instant::now();
         let (xs, w_mu) = self.new_w_mu(w, rows, &b, &x, &special, &y_cap);
+        self.timings.products += t.elapsed().as_secs_f64();
         xs.iter().all(|v| v.is_finite()).then_some((xs, w_mu))
     }
 
@@ -170,27 +288,43 @@ impl LuCache {
         (b, special)
     }
 
-    /// Computes the columns `G = K⁻¹ e_q` of the special rows not computed yet; `None` if `K`
-    /// is not factorised.
-    fn solve_g_columns(&mut self, special: &[SpecialRow]) -> Option<()> {
-        let llt = self.k_llt.as_ref()?;
-        let nk = self.k_unk.len();
-        // Columns of G not computed yet, in one solve with several right-hand sides.
-        let missing: Vec<usize> = special
+    /// Computes the columns `G = K⁻¹ e_q` of the special rows not computed yet, and with them
+    /// (when any is missing) those of up to [`PREFETCH`] positions of `likely` not computed
+    /// yet; `None` if `K` is not factorised.
+    fn solve_g_columns(&mut self, special: &[SpecialRow], likely: &[usize]) -> Option<()> {
+        let mut missing: Vec<usize> = special
             .iter()
             .map(|s| s.row)
             .filter(|&q| self.k_cols[q].is_empty())
             .collect();
-        if !missing.is_empty() {
-            let mut e = Mat::<f64>::zeros(nk, missing.len());
-            for (c, &q) in missing.iter().enumerate() {
-                e[(q, c)] = 1.0;
-            }
-            llt.solve_in_place(&mut e);
-            for (c, &q) in missing.iter().enumerate() {
-                self.k_cols[q] = e.col(c).iter().copied().collect();
-            }
+        if missing.is_empty() {
+            return self.k_llt.as_ref().map(|_| ());
         }
+        let mut taken = std::collections::HashSet::<usize>::from_iter(missing.iter().copied());
+        missing.extend(
+            likely
+                .iter()
+                .copied()
+                .filter(|&q| self.k_cols[q].is_empty() && taken.insert(q))
+                .take(PREFETCH),
+        );
+        self.solve_columns(missing)
+    }
+
+    /// Solves for the columns `G = K⁻¹ e_q` at positions `qs` in one solve with several
+    /// right-hand sides, and records the batch; `None` if `K` is not factorised.
+    fn solve_columns(&mut self, qs: Vec<usize>) -> Option<()> {
+        let llt = self.k_llt.as_ref()?;
+        let nk = self.k_unk.len();
+        let mut e = Mat::<f64>::zeros(nk, qs.len());
+        for (c, &q) in qs.iter().enumerate() {
+            e[(q, c)] = 1.0;
+        }
+        llt.solve_in_place(&mut e);
+        for (c, &q) in qs.iter().enumerate() {
+            self.k_cols[q] = e.col(c).iter().copied().collect();
+        }
+        self.batches.push(qs);
         Some(())
     }
 
@@ -212,9 +346,7 @@ impl LuCache {
         let y = clu.solve(&rhs);
         let y_cap: Vec<f64> = (0..p).map(|j| y[(j, 0)]).collect();
         for (sj, yj) in special.iter().zip(&y_cap) {
-            for (xi, gi) in x.iter_mut().zip(&self.k_cols[sj.row]) {
-                *xi -= gi * yj;
-            }
+            axpy(x, -yj, &self.k_cols[sj.row]);
         }
         Some(y_cap)
     }
@@ -324,6 +456,9 @@ impl LuCache {
         self.k_unk.clear();
         self.k_pos.clear();
         self.k_cols.clear();
+        self.bt.clear();
+        self.xt.clear();
+        self.batches.clear();
         let llt = llt?;
         // The pivots are L_ii²: as for an LU, singular when the smallest is below 1e-12 of the
         // largest; and pivots within 2^52 of the smallest normal number have lost digits to
