@@ -187,7 +187,11 @@ impl ContactSystem {
         let mut slip = vec![SlipLin::default(); ns];
         if let Some(law) = it.law {
             for j in (0..ns).filter(|&j| it.status[j] == Status::Slip) {
-                let dv = self.y_at(w0, mu, ns + j) - prev.v[j];
+                let y_j = match it.y {
+                    Some(y) => y[ns + j],
+                    None => self.y_at(w0, mu, ns + j),
+                };
+                let dv = y_j - prev.v[j];
                 let u_k = prev.slip_mu[j] + dv.abs();
                 slip[j] = SlipLin {
                     mu: law.mu(u_k),

@@ -69,6 +69,10 @@ pub struct LuCache {
     pub gmres_iterations: usize,
     /// Seconds spent in each part of the structured solve (for the run summary).
     pub timings: SolveTimings,
+    /// Solve every system directly (no start from the step's last direct solve): set by
+    /// [`super::ContactSystem::solve_step`] for small systems and for the second attempt at a
+    /// step that failed.
+    pub(super) exact: bool,
 }
 
 /// Seconds spent in the parts of the structured contact solve, summed over a run.
@@ -126,6 +130,12 @@ impl LuCache {
         self.bt.clear();
         self.xt.clear();
         self.batches.clear();
+    }
+
+    /// Forgets the last direct solve (the next system is solved directly).
+    pub(super) fn forget_direct(&mut self) {
+        self.bt.clear();
+        self.xt.clear();
     }
 
     /// At a checkpoint: forgets what a resumed run could not rebuild bit for bit (the dense
@@ -219,7 +229,8 @@ impl LuCache {
         for s in &special {
             is_special[s.row] = true;
         }
-        let reuse = self.xt.len() == nk
+        let reuse = !self.exact
+            && self.xt.len() == nk
             && (0..nk).all(|q| is_special[q] || b[q].to_bits() == self.bt[q].to_bits());
         if !reuse {
             let llt = self.k_llt.as_ref()?;

@@ -130,6 +130,8 @@ pub struct Iterate<'a> {
     pub prev: &'a State,
     /// Current forces μ = (F_n, F_t, z).
     pub mu: &'a [f64],
+    /// `y = w0 + W μ` at them if known (else computed where needed).
+    pub y: Option<&'a [f64]>,
     pub status: &'a [Status],
     /// Slip direction per node (sign of the master's tangential force).
     pub sign: &'a [f64],
