@@ -60,6 +60,10 @@ pub struct LuCache {
     /// and `x̃ = K⁻¹ b̃` (empty: none since the factorisation or the last checkpoint).
     bt: Vec<f64>,
     xt: Vec<f64>,
+    /// The rows of `W` outside the block and `W[out_rows, k_unk]`, contiguous for the product
+    /// of every iteration.
+    out_rows: Vec<usize>,
+    w_out: Option<Mat<f64>>,
     /// The batches of columns of `G` solved for since `K` was factorised (positions in `K`),
     /// in order: with `k_unk`, what a resumed run replays to reach the same factors.
     batches: Vec<Vec<usize>>,
@@ -130,6 +134,8 @@ impl LuCache {
         self.bt.clear();
         self.xt.clear();
         self.batches.clear();
+        self.out_rows.clear();
+        self.w_out = None;
     }
 
     /// Forgets the last direct solve (the next system is solved directly).
@@ -448,10 +454,30 @@ impl LuCache {
                 w_mu[u] -= yj;
             }
         }
-        for (i, wi) in w_mu.iter_mut().enumerate() {
+        // Rows outside K: one product with the block W[out, K] kept with the factor, at the
+        // iterate (zero on the unknowns of K not in this system). Sequential, so that the
+        // sums do not depend on the number of threads.
+        let mut xk = Mat::<f64>::zeros(self.k_unk.len(), 1);
+        for (&u, &xu) in rows.unk.iter().zip(&xs) {
+            xk[(self.k_pos[u], 0)] = xu;
+        }
+        let mut prod = Mat::<f64>::zeros(self.out_rows.len(), 1);
+        faer::linalg::matmul::matmul(
+            prod.as_mut(),
+            faer::Accum::Replace,
+            self.w_out.as_ref().expect("kept with the factor").as_ref(),
+            xk.as_ref(),
+            1.0,
+            faer::Par::Seq,
+        );
+        for (r, &i) in self.out_rows.iter().enumerate() {
+            w_mu[i] = prod[(r, 0)];
+        }
+        // Rows of K not in this system (nodes that left the contact): dot products.
+        for &i in &self.k_unk {
             if !in_unk[i] {
                 let col = w.col(i);
-                *wi = rows.unk.iter().zip(&xs).map(|(&u, xu)| col[u] * xu).sum();
+                w_mu[i] = rows.unk.iter().zip(&xs).map(|(&u, xu)| col[u] * xu).sum();
             }
         }
         (xs, w_mu)
@@ -486,6 +512,12 @@ impl LuCache {
         }
         self.k_unk = unk.to_vec();
         self.k_cols = vec![Vec::new(); unk.len()];
+        self.out_rows = (0..w.nrows())
+            .filter(|&i| self.k_pos[i] == usize::MAX)
+            .collect();
+        self.w_out = Some(Mat::from_fn(self.out_rows.len(), unk.len(), |r, q| {
+            w[(self.out_rows[r], unk[q])]
+        }));
         self.k_llt = Some(llt);
         Some(())
     }
