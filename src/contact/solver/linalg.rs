@@ -116,8 +116,10 @@ pub(super) const STRUCTURED_MIN: usize = 64;
 /// Columns of `G` solved for ahead of need with each batch: those of the stick nodes nearest
 /// their friction limit, which are the next to slip as a tangential load grows. A solve with
 /// the cached factor reads the whole factor (tens of MB at L7) whatever the number of
-/// right-hand sides, so a few dozen columns cost little more than one.
-const PREFETCH: usize = 32;
+/// right-hand sides, so a few dozen columns cost little more than one. Fig. 2 on L7 spends
+/// 2.35 s on columns without, 0.97 s with 16, 0.88 s with 32, 0.80 s with 64 and 0.79 s with
+/// 128 (one run each).
+const PREFETCH: usize = 64;
 
 /// GMRES iterations before giving up on the cached factorisation and refactorising.
 const GMRES_MAX: usize = 12;
