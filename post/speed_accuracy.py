@@ -107,7 +107,7 @@ def main():
           "Contact pressure against Hertz, VM272 ladder (P = 10 N/mm)",
           os.path.join(args.outdir, "speed_accuracy_pressure.png"))
     chart(rows, "q_err_max", ("vm272_cm", "fig2"), 0.02, r"target 2 % of $\mu p_0$",
-          r"max $|q - q_{CM}|/(\mu p_0)$ outside $c \pm 2h$, $a - 2h$",
+          r"max $|q - q_{CM}|/(\mu p_0)$ outside $c \pm w$, $a - w$ ($w = \max(2h, 0.05a)$)",
           "Shear traction against Cattaneo–Mindlin (μ = 0.2, Q = 0.936 N/mm)",
           os.path.join(args.outdir, "speed_accuracy_shear.png"))
 

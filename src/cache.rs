@@ -227,7 +227,7 @@ impl KeyBuilder {
         }
     }
     fn finish(&self) -> Key {
-        Key([xxh64(&self.0, 0), xxh64(&self.0, 0x5eed_0f_ca11)])
+        Key([xxh64(&self.0, 0), xxh64(&self.0, 0x005e_ed0f_ca11)])
     }
 }
 
@@ -710,7 +710,7 @@ pub fn parse_size(s: &str) -> Option<u64> {
         "t" | "tb" | "tib" => 1 << 40,
         _ => return None,
     };
-    (x.is_finite() && x >= 0.0).then(|| (x * mult as f64) as u64)
+    (x.is_finite() && x >= 0.0).then_some((x * mult as f64) as u64)
 }
 
 impl Store {

@@ -561,7 +561,7 @@ impl SaddleSymbolic {
                 }
                 let d = v[(j, j)];
                 dmax = dmax.max(d.abs());
-                if !(d > 1e-14 * dmax) {
+                if d.partial_cmp(&(1e-14 * dmax)) != Some(std::cmp::Ordering::Greater) {
                     return Err(FactorError::NotPositiveDefinite { pivot: col, n });
                 }
             }
@@ -646,16 +646,23 @@ impl SaddleFactor {
                 let pat = node.pattern();
                 debug_assert!(pat.windows(2).all(|p| p[0] < p[1]));
                 let kp = pat.partition_point(|&r| r < n);
-                (node.start(), (node.val().ncols()).min(n - node.start()), kp, node)
+                (
+                    node.start(),
+                    (node.val().ncols()).min(n - node.start()),
+                    kp,
+                    node,
+                )
             })
             .collect();
+        // Each supernode is read once for all the columns (the factor is tens to hundreds of MB
+        // and the sweeps are memory-bound); each column sees the same operations in the same
+        // order as when it is solved alone.
         let mut t = Vec::new();
-        for j in 0..ncols {
-            let x = &mut x[j * size..(j + 1) * size];
-            // Forward: L_KK y = b; the off-diagonal rows of a supernode are gathered into `t`
-            // and scattered once.
-            for (start, wk, kp, node) in &nodes {
-                let (v, pat, w) = (node.val(), &node.pattern()[..*kp], node.val().ncols());
+        // Forward: L_KK y = b; the off-diagonal rows of a supernode are gathered into `t` and
+        // scattered once.
+        for (start, wk, kp, node) in &nodes {
+            let (v, pat, w) = (node.val(), &node.pattern()[..*kp], node.val().ncols());
+            for x in x.chunks_exact_mut(size) {
                 t.clear();
                 t.resize(*kp, 0.0);
                 for c in 0..*wk {
@@ -663,7 +670,11 @@ impl SaddleFactor {
                     if xc == 0.0 {
                         continue;
                     }
-                    let col = v.col(c).try_as_col_major().expect("column-major").as_slice();
+                    let col = v
+                        .col(c)
+                        .try_as_col_major()
+                        .expect("column-major")
+                        .as_slice();
                     for r in c + 1..*wk {
                         x[start + r] -= col[r] * xc;
                     }
@@ -675,20 +686,28 @@ impl SaddleFactor {
                     x[row] -= tk;
                 }
             }
-            // D.
-            for (start, wk, _, node) in &nodes {
-                let v = node.val();
+        }
+        // D.
+        for (start, wk, _, node) in &nodes {
+            let v = node.val();
+            for x in x.chunks_exact_mut(size) {
                 for c in 0..*wk {
                     x[start + c] /= v[(c, c)];
                 }
             }
-            // Backward: L_KKᵀ x = y; the pattern's values gathered into `t` once.
-            for (start, wk, kp, node) in nodes.iter().rev() {
-                let (v, pat, w) = (node.val(), &node.pattern()[..*kp], node.val().ncols());
+        }
+        // Backward: L_KKᵀ x = y; the pattern's values gathered into `t` once.
+        for (start, wk, kp, node) in nodes.iter().rev() {
+            let (v, pat, w) = (node.val(), &node.pattern()[..*kp], node.val().ncols());
+            for x in x.chunks_exact_mut(size) {
                 t.clear();
                 t.extend(pat.iter().map(|&row| x[row]));
                 for c in (0..*wk).rev() {
-                    let col = v.col(c).try_as_col_major().expect("column-major").as_slice();
+                    let col = v
+                        .col(c)
+                        .try_as_col_major()
+                        .expect("column-major")
+                        .as_slice();
                     let mut acc = x[start + c];
                     for r in c + 1..*wk {
                         acc -= col[r] * x[start + r];
@@ -741,7 +760,8 @@ impl SaddleFactor {
             }
         }
         let dmax = (0..m).map(|i| l[(i, i)].abs()).fold(0.0, f64::max);
-        if (0..m).any(|i| !(l[(i, i)] < -1e-13 * dmax)) {
+        if (0..m).any(|i| l[(i, i)].partial_cmp(&(-1e-13 * dmax)) != Some(std::cmp::Ordering::Less))
+        {
             return None;
         }
         // B = L D (lower), W = −B Lᵀ, lower half, then mirrored.

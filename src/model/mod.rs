@@ -102,6 +102,10 @@ pub struct Model {
     /// the write when the model is dropped.
     #[allow(dead_code)]
     cache_job: Option<crate::cache::Job>,
+    /// The element stiffness matrices, in the order of `elems`, once
+    /// [`Model::keep_element_stiffness`] has been called (a sweep does, so that the
+    /// self-checks of each of its rows do not integrate them again).
+    element_k: std::sync::OnceLock<Vec<[f64; 144]>>,
 }
 
 impl Model {
@@ -367,6 +371,7 @@ impl Model {
             timings: timings.clone(),
             cache: cache_report,
             cache_job,
+            element_k: std::sync::OnceLock::new(),
         })
     }
 

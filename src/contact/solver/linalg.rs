@@ -224,7 +224,11 @@ impl LuCache {
         }
         let nk = self.k_unk.len();
         let (b, special) = self.on_block(rows);
-        let likely: Vec<usize> = rows.likely.iter().map(|&r| self.k_pos[rows.unk[r]]).collect();
+        let likely: Vec<usize> = rows
+            .likely
+            .iter()
+            .map(|&r| self.k_pos[rows.unk[r]])
+            .collect();
         let t = Instant::now();
         let cols = self.solve_g_columns(&special, &likely);
         self.timings.columns += t.elapsed().as_secs_f64();
