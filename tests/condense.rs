@@ -116,13 +116,25 @@ fn block_recovery_of_contact_fields_equals_one_solve_each() {
         serde_json::from_value(shipped_case_on("vm272_cm.json", "vm272_L1.msh")).unwrap();
     let model = Model::build(&case, &repo().join("cases/vm272_cm.json")).unwrap();
     let law = model.friction.clone();
-    let sim = simulate(&model, &case, law.as_ref(), LogLevel::Error, &mut |_| Ok(())).unwrap();
+    let sim = simulate(
+        &model,
+        &case,
+        law.as_ref(),
+        LogLevel::Error,
+        &mut |_| Ok(()),
+    )
+    .unwrap();
     assert!(sim.failure.is_none(), "{:?}", sim.failure);
     let st = sim.last_state.as_ref().expect("a converged step");
-    // Three different right-hand sides: the last state at two load scales and a zero-force one.
+    // Three different right-hand sides: the last state at two load scales, and with its normal
+    // forces halved.
     let mut open = st.clone();
     open.f_n.iter_mut().for_each(|f| *f *= 0.5);
-    let states = [(sim.last_scale, st), (0.5 * sim.last_scale, st), (sim.last_scale, &open)];
+    let states = [
+        (sim.last_scale, st),
+        (0.5 * sim.last_scale, st),
+        (sim.last_scale, &open),
+    ];
     let block = model.contact_displacements(&states);
     assert_eq!(block.len(), 3);
     for (k, (scale, s)) in states.iter().enumerate() {
@@ -132,7 +144,10 @@ fn block_recovery_of_contact_fields_equals_one_solve_each() {
             .iter()
             .zip(&block[k])
             .all(|(a, b)| a.to_bits() == b.to_bits());
-        assert!(same, "column {k} of the block solve differs from its own solve");
+        assert!(
+            same,
+            "column {k} of the block solve differs from its own solve"
+        );
         assert!(one.iter().any(|v| *v != 0.0), "column {k} is zero");
     }
     assert_ne!(block[0], block[2], "the three right-hand sides must differ");
