@@ -204,8 +204,10 @@ impl Condensed {
         x
     }
 
-    /// [`Condensed::recover_total`] of several load cases in one block solve: the factor is
-    /// read once for all of them, and each field equals its own `recover_total` bit for bit.
+    /// The full free solutions for load cases `(f, r_R)`: loads `f` and total forces `r_R` on
+    /// the retained DOFs that already include the grounding-spring forces,
+    /// `u = K̂⁻¹ (f + [0; r_R])`. One block solve: the factor is read once for all the cases,
+    /// and each field is bit for bit what a solve of its own gives.
     pub fn recover_total_many(&self, cases: &[(Vec<f64>, Vec<f64>)]) -> Vec<Vec<f64>> {
         let Some(n) = cases.first().map(|(f, _)| f.len()) else {
             return Vec::new();
@@ -220,16 +222,5 @@ impl Condensed {
         }
         self.chol.solve_block_in_place(&mut x, cases.len());
         x.chunks_exact(n).map(<[f64]>::to_vec).collect()
-    }
-
-    /// The full free solution for loads `f` and total forces `r_R` on the retained DOFs that
-    /// already include the grounding-spring forces: `u = K̂⁻¹ (f + [0; r_R])`.
-    pub fn recover_total(&self, f: &[f64], r_r: &[f64]) -> Vec<f64> {
-        let mut x = f.to_vec();
-        for (i, r) in r_r.iter().enumerate() {
-            x[self.n_i + i] += r;
-        }
-        self.chol.solve_in_place(&mut x);
-        x
     }
 }

@@ -83,9 +83,14 @@ impl Model {
                 let nodes = &self.mesh.triangles[*e].nodes;
                 let ue: [f64; 12] =
                     std::array::from_fn(|i| self.dofs.displacement(nodes[i / 2], u)[i % 2]);
+                let integrated;
                 let k = match kept {
-                    Some(k) => k[i],
-                    None => crate::elasticity::element_stiffness(&self.mesh.tri_coords(*e), mat),
+                    Some(k) => &k[i],
+                    None => {
+                        integrated =
+                            crate::elasticity::element_stiffness(&self.mesh.tri_coords(*e), mat);
+                        &integrated
+                    }
                 };
                 let fe: [f64; 12] =
                     std::array::from_fn(|i| (0..12).map(|j| k[i * 12 + j] * ue[j]).sum());
@@ -156,8 +161,8 @@ impl Model {
             .solve_step(&w0, drive, law, prev, guess, opt, cache)
     }
 
-    /// [`Model::contact_displacement`] of several states in one block solve (bit for bit the
-    /// same fields).
+    /// [`Model::contact_displacement`] of several states in one block solve, which reads the
+    /// factor once for all of them (bit for bit the same fields).
     pub fn contact_displacements(&self, states: &[(f64, &State)]) -> Vec<Vec<f64>> {
         let cm = self.contact.as_ref().expect("contact model");
         let cases: Vec<_> = states
@@ -175,9 +180,8 @@ impl Model {
     /// The displacement of all free DOFs for a contact state at traction scale `scale`: one
     /// solve with the factorised stiffness.
     pub fn contact_displacement(&self, scale: f64, st: &State) -> Vec<f64> {
-        let cm = self.contact.as_ref().expect("contact model");
-        let r = cm.retained_forces(st, self.dofs.n_retained);
-        self.condensed.recover_total(&self.load(scale), &r)
+        let mut u = self.contact_displacements(&[(scale, st)]);
+        u.pop().expect("one field per state")
     }
 
     /// Contact figures of a state.

@@ -329,28 +329,32 @@ pub fn sweep(
             })
             .collect();
         if model.contact.is_some() {
-            let need: Vec<usize> = (0..runs.len())
-                .filter(|&k| {
-                    matches!(&runs[k].2, Ok(sim) if sim.last_u.is_none() && sim.last_state.is_some())
-                })
-                .collect();
-            let states: Vec<(f64, &crate::contact::solver::State)> = need
+            // The runs whose checks need a field: (index in `runs`, traction scale, state).
+            let need: Vec<(usize, f64, &crate::contact::solver::State)> = runs
                 .iter()
-                .filter_map(|&k| match &runs[k].2 {
-                    Ok(sim) => sim.last_state.as_ref().map(|st| (sim.last_scale, st)),
-                    Err(_) => None,
+                .enumerate()
+                .filter_map(|(k, (_, _, res))| match res {
+                    Ok(sim) if sim.last_u.is_none() => {
+                        sim.last_state.as_ref().map(|st| (k, sim.last_scale, st))
+                    }
+                    _ => None,
                 })
                 .collect();
             // One block solve per thread.
-            let per = states
+            let per = need
                 .len()
                 .div_ceil(rayon::current_num_threads().max(1))
                 .max(1);
-            let fields: Vec<Vec<f64>> = states
+            let fields: Vec<(usize, Vec<f64>)> = need
                 .par_chunks(per)
-                .flat_map_iter(|c| model.contact_displacements(c))
+                .flat_map_iter(|c| {
+                    let states: Vec<_> = c.iter().map(|&(_, scale, st)| (scale, st)).collect();
+                    c.iter()
+                        .map(|&(k, _, _)| k)
+                        .zip(model.contact_displacements(&states))
+                })
                 .collect();
-            for (k, u) in need.into_iter().zip(fields) {
+            for (k, u) in fields {
                 if let Ok(sim) = &mut runs[k].2 {
                     sim.last_u = Some(u);
                 }

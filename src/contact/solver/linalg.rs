@@ -129,12 +129,16 @@ impl LuCache {
     pub fn clear(&mut self) {
         self.lu = None;
         self.unk.clear();
+        self.forget_block();
+    }
+
+    /// Forgets the factorised block `K` and everything computed from it.
+    fn forget_block(&mut self) {
         self.k_llt = None;
         self.k_unk.clear();
         self.k_pos.clear();
         self.k_cols.clear();
-        self.bt.clear();
-        self.xt.clear();
+        self.forget_direct();
         self.batches.clear();
         self.out_rows.clear();
         self.w_out = None;
@@ -151,8 +155,7 @@ impl LuCache {
     pub fn checkpoint(&mut self) -> Option<BlockRecord> {
         self.lu = None;
         self.unk.clear();
-        self.bt.clear();
-        self.xt.clear();
+        self.forget_direct();
         self.k_llt.as_ref().map(|_| BlockRecord {
             unk: self.k_unk.clone(),
             batches: self.batches.clone(),
@@ -495,13 +498,7 @@ impl LuCache {
         let k = Mat::from_fn(unk.len(), unk.len(), |i, j| w[(unk[i], unk[j])]);
         let llt = k.llt(faer::Side::Lower).ok();
         self.factorisations += 1;
-        self.k_llt = None;
-        self.k_unk.clear();
-        self.k_pos.clear();
-        self.k_cols.clear();
-        self.bt.clear();
-        self.xt.clear();
-        self.batches.clear();
+        self.forget_block();
         let llt = llt?;
         // The pivots are L_ii²: as for an LU, singular when the smallest is below 1e-12 of the
         // largest; and pivots within 2^52 of the smallest normal number have lost digits to
