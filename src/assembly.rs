@@ -20,30 +20,75 @@ pub struct UpperCsc {
 }
 
 impl UpperCsc {
-    /// The sparsity pattern of the free DOFs of the given elements.
+    /// The sparsity pattern of the free DOFs of the given elements: the entries of each
+    /// column counted, written into one array and then sorted and deduplicated column by
+    /// column in parallel (no per-column allocations).
     pub fn pattern(mesh: &Mesh, elems: &[(usize, Material)], dofs: &DofMap) -> UpperCsc {
         let n = dofs.n_free();
-        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n];
+        // The free DOFs of each element.
+        let free = |e: usize| -> ([usize; 12], usize) {
+            let mut f = [0usize; 12];
+            let mut k = 0;
+            for d in dofs.element_dofs(&mesh.triangles[e].nodes) {
+                if let Dof::Free(c) = d {
+                    f[k] = c;
+                    k += 1;
+                }
+            }
+            (f, k)
+        };
+        // Entries per column, repeats included.
+        let mut start = vec![0usize; n + 1];
         for (e, _) in elems {
-            let d = dofs.element_dofs(&mesh.triangles[*e].nodes);
-            for a in d {
-                let Dof::Free(c) = a else { continue };
-                for b in d {
-                    if let Dof::Free(r) = b
-                        && r <= c
-                    {
-                        cols[c].push(r);
+            let (f, k) = free(*e);
+            for &c in &f[..k] {
+                start[c + 1] += f[..k].iter().filter(|&&r| r <= c).count();
+            }
+        }
+        for c in 0..n {
+            start[c + 1] += start[c];
+        }
+        let mut rows = vec![0usize; start[n]];
+        let mut next = start[..n].to_vec();
+        for (e, _) in elems {
+            let (f, k) = free(*e);
+            for &c in &f[..k] {
+                for &r in &f[..k] {
+                    if r <= c {
+                        rows[next[c]] = r;
+                        next[c] += 1;
                     }
                 }
             }
         }
+        // Each column sorted and deduplicated in place: its distinct rows first.
+        let mut cols: Vec<&mut [usize]> = Vec::with_capacity(n);
+        let mut rest = rows.as_mut_slice();
+        for c in 0..n {
+            let (head, tail) = rest.split_at_mut(start[c + 1] - start[c]);
+            cols.push(head);
+            rest = tail;
+        }
+        let distinct: Vec<usize> = cols
+            .par_iter_mut()
+            .with_min_len(1024)
+            .map(|col| {
+                col.sort_unstable();
+                let mut m = 0;
+                for i in 0..col.len() {
+                    if m == 0 || col[i] != col[m - 1] {
+                        col[m] = col[i];
+                        m += 1;
+                    }
+                }
+                m
+            })
+            .collect();
         let mut col_ptr = Vec::with_capacity(n + 1);
-        let mut row_idx = Vec::new();
         col_ptr.push(0);
-        for c in cols.iter_mut() {
-            c.sort_unstable();
-            c.dedup();
-            row_idx.extend_from_slice(c);
+        let mut row_idx = Vec::with_capacity(distinct.iter().sum());
+        for c in 0..n {
+            row_idx.extend_from_slice(&rows[start[c]..start[c] + distinct[c]]);
             col_ptr.push(row_idx.len());
         }
         let nnz = row_idx.len();

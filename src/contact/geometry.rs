@@ -2,6 +2,7 @@
 //! the candidate zone and its ends, and the mortar operator built on it.
 
 use super::mortar::{self, Mortar};
+use super::search::{Aabb, EdgeGrid};
 use crate::loads::EdgeOrientation;
 use crate::mesh::Mesh;
 
@@ -95,24 +96,59 @@ pub fn default_candidate_gap(mesh: &Mesh, slave: &[[usize; 3]]) -> f64 {
     0.005 * (hi[0] - lo[0]).hypot(hi[1] - lo[1])
 }
 
+/// The master face indexed for [`point_gap`]: its edges' coordinates, a grid of the boxes of
+/// their Bézier control points, and the largest side of those boxes.
+struct MasterIndex {
+    coords: Vec<[[f64; 2]; 3]>,
+    grid: EdgeGrid,
+    max_side: f64,
+}
+
+impl MasterIndex {
+    fn new(mesh: &Mesh, master: &[[usize; 3]]) -> MasterIndex {
+        let coords: Vec<[[f64; 2]; 3]> = master.iter().map(|e| e.map(|k| mesh.nodes[k])).collect();
+        let boxes: Vec<Aabb> = coords.iter().map(control_box).collect();
+        let max_side = boxes
+            .iter()
+            .map(|(lo, hi)| (hi[0] - lo[0]).max(hi[1] - lo[1]))
+            .fold(0.0, f64::max);
+        MasterIndex {
+            grid: EdgeGrid::new(&boxes),
+            coords,
+            max_side,
+        }
+    }
+}
+
+/// The master parameters a hit of [`point_gap`] may have: the edge and round-off.
+const R_MAX: f64 = 1.0 + 1e-9;
+
 /// Initial gap of a slave point along its normal: the smallest |g| over master edges hit
 /// within their parameter range, ignoring hits farther than `reach` (a normal line far from the
-/// contact can cross the other face behind the point without any overlap).
+/// contact can cross the other face behind the point without any overlap). The master edges
+/// are visited in order, as a scan of the whole face would; the grid only skips edges that
+/// [`within_reach`] rejects.
 fn point_gap(
-    mesh: &Mesh,
-    master: &[[usize; 3]],
+    master: &MasterIndex,
     x: [f64; 2],
     n: [f64; 2],
     reach: f64,
+    near: &mut Vec<usize>,
 ) -> Option<f64> {
+    // Every edge that passes `within_reach` has its box within this distance of `x`.
+    let r =
+        (reach + 1e-6 * (reach + x[0].abs() + x[1].abs() + 2.0 * master.max_side)) * (1.0 + 1e-9);
+    master
+        .grid
+        .query(&([x[0] - r, x[1] - r], [x[0] + r, x[1] + r]), near);
     let mut best: Option<f64> = None;
-    for e in master {
-        let xm = e.map(|k| mesh.nodes[k]);
-        if !within_reach(&xm, x, reach) {
+    for &i in near.iter() {
+        let xm = &master.coords[i];
+        if !within_reach(xm, x, reach) || !mortar::may_hit_within(xm, x, n, R_MAX) {
             continue;
         }
-        if let Some((r, g)) = mortar::project_along(&xm, x, n)
-            && (-1.0 - 1e-9..=1.0 + 1e-9).contains(&r)
+        if let Some((r, g)) = mortar::project_along(xm, x, n)
+            && (-R_MAX..=R_MAX).contains(&r)
             && g.abs() <= reach
             && best.is_none_or(|b| g.abs() < b.abs())
         {
@@ -122,21 +158,33 @@ fn point_gap(
     best
 }
 
+/// The box of the Bézier control points of a quadratic edge (end, end, middle node), which
+/// contains the curve.
+fn control_box(xm: &[[f64; 2]; 3]) -> Aabb {
+    let c = [
+        2.0 * xm[2][0] - 0.5 * (xm[0][0] + xm[1][0]),
+        2.0 * xm[2][1] - 0.5 * (xm[0][1] + xm[1][1]),
+    ];
+    let mut lo = [0.0; 2];
+    let mut hi = [0.0; 2];
+    for i in 0..2 {
+        lo[i] = xm[0][i].min(xm[1][i]).min(c[i]);
+        hi[i] = xm[0][i].max(xm[1][i]).max(c[i]);
+    }
+    (lo, hi)
+}
+
 /// Whether a master edge may hold a hit within `reach` of `x`: the distance from `x` to the
 /// bounding box of the edge's Bézier control points (which contains the curve) is at most
 /// `reach`, with a margin far above the round-off of [`mortar::project_along`]. Edges that fail
 /// cannot give an accepted hit in [`point_gap`]; skipping them saves the projections, which
 /// otherwise take most of the time of building a pair on a fine mesh.
 fn within_reach(xm: &[[f64; 2]; 3], x: [f64; 2], reach: f64) -> bool {
-    let c = [
-        2.0 * xm[2][0] - 0.5 * (xm[0][0] + xm[1][0]),
-        2.0 * xm[2][1] - 0.5 * (xm[0][1] + xm[1][1]),
-    ];
+    let (lo, hi) = control_box(xm);
     let mut d2 = 0.0;
     let mut scale = reach + x[0].abs() + x[1].abs();
     for i in 0..2 {
-        let lo = xm[0][i].min(xm[1][i]).min(c[i]);
-        let hi = xm[0][i].max(xm[1][i]).max(c[i]);
+        let (lo, hi) = (lo[i], hi[i]);
         let d = (lo - x[i]).max(x[i] - hi).max(0.0);
         d2 += d * d;
         scale += hi - lo;
@@ -256,6 +304,8 @@ fn scan_slave(
     let mut deepest: Option<(f64, [f64; 2])> = None;
     // The largest initial gap sampled on a zone edge (bounds the mortar's search).
     let mut zone_gap: f64 = candidate_gap;
+    let index = MasterIndex::new(mesh, master);
+    let mut near = Vec::new();
     for (i, e) in slave.iter().enumerate() {
         let xs = e.map(|k| mesh.nodes[k]);
         let mut in_zone = false;
@@ -263,7 +313,7 @@ fn scan_slave(
         for s in [-1.0, 0.0, 1.0] {
             let (x, n, _, _) = mortar::frame(&xs, s);
             let h = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
-            if let Some(g) = point_gap(mesh, master, x, n, 10.0 * (candidate_gap + h)) {
+            if let Some(g) = point_gap(&index, x, n, 10.0 * (candidate_gap + h), &mut near) {
                 min_gap = min_gap.min(g);
                 samples.push((g, n));
                 if g < -1e-9 * h && deepest.is_none_or(|d: (f64, [f64; 2])| -g > d.0) {

@@ -7,6 +7,7 @@
 
 pub mod geometry;
 pub mod mortar;
+pub mod search;
 pub mod solver;
 
 pub use geometry::{Pair, PairError, build_pair, default_candidate_gap, oriented_edges};

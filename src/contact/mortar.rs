@@ -82,6 +82,49 @@ pub fn project_along(xm: &[[f64; 2]; 3], x: [f64; 2], n: [f64; 2]) -> Option<(f6
     None
 }
 
+/// Whether [`project_along`] may return an `r` in `[−r_max, r_max]`: `false` only when it
+/// provably cannot. Its iteration stops on a residual `f = xm(r) − x − g n` below
+/// `1e−12 (size + |x|)`, and `|f| |n| ≥ |f × n| = |h(r)|` with `h(r) = (xm(r) − x) × n =
+/// a r² + b r + c`; so when `|h|` stays above a thousand times that tolerance over the whole
+/// interval (checked at its ends and at the vertex of `h`, where the extremes of a quadratic
+/// are), no converged `r` lies in it. Callers that reject hits outside the interval skip the
+/// iteration there and get the same results; on a fine mesh most projections of the pairing's
+/// search are of that kind.
+pub fn may_hit_within(xm: &[[f64; 2]; 3], x: [f64; 2], n: [f64; 2], r_max: f64) -> bool {
+    let cross = |u: [f64; 2]| u[0] * n[1] - u[1] * n[0];
+    // xm(r) = m + r d + r² q (end nodes at r = ∓1, middle node m at r = 0).
+    let q = [
+        0.5 * (xm[0][0] + xm[1][0]) - xm[2][0],
+        0.5 * (xm[0][1] + xm[1][1]) - xm[2][1],
+    ];
+    let d = [0.5 * (xm[1][0] - xm[0][0]), 0.5 * (xm[1][1] - xm[0][1])];
+    let (a, b, c) = (
+        cross(q),
+        cross(d),
+        cross([xm[2][0] - x[0], xm[2][1] - x[1]]),
+    );
+    if !(a.is_finite() && b.is_finite() && c.is_finite() && r_max.is_finite()) {
+        return true;
+    }
+    let size = (xm[0][0] - xm[1][0]).hypot(xm[0][1] - xm[1][1]);
+    let tol = 1e-12 * (size + x[0].abs() + x[1].abs());
+    // Round-off of evaluating h on the interval, far below the margin.
+    let slack = 1e-12 * (a.abs() * r_max * r_max + b.abs() * r_max + c.abs());
+    let margin = 1e3 * tol * n[0].hypot(n[1]) + slack;
+    let h = |r: f64| (a * r + b) * r + c;
+    let (lo, hi) = (h(-r_max), h(r_max));
+    // The vertex, when inside the interval (else the ends again).
+    let rv = -b / (2.0 * a);
+    let mid = if a != 0.0 && rv.abs() < r_max {
+        h(rv)
+    } else {
+        lo
+    };
+    let clear = (lo > margin && hi > margin && mid > margin)
+        || (lo < -margin && hi < -margin && mid < -margin);
+    !clear
+}
+
 /// Position, unit outward normal, unit tangent and length element of a slave edge at `s`.
 /// The edge is oriented with its body on the left, so the outward normal is `(t_y, −t_x)/|t|`.
 pub fn frame(xs: &[[f64; 2]; 3], s: f64) -> ([f64; 2], [f64; 2], [f64; 2], f64) {
@@ -165,6 +208,12 @@ pub fn build(
     // Bounding boxes of the master edges for a quick search.
     let mboxes: Vec<([f64; 2], [f64; 2])> =
         master.iter().map(|e| bounding_box(&coords(e))).collect();
+    let grid = super::search::EdgeGrid::new(&mboxes);
+    let max_side = mboxes
+        .iter()
+        .map(|(lo, hi)| (hi[0] - lo[0]).max(hi[1] - lo[1]))
+        .fold(0.0, f64::max);
+    let mut near = Vec::new();
     let mut coverage = Vec::with_capacity(slave.len());
     for se in slave {
         let xs = coords(se);
@@ -178,7 +227,12 @@ pub fn build(
         // `max_gap` (plus a margin of a few chords for the curvature of both faces).
         let (lo, hi) = bounding_box(&xs);
         let mut segments: Vec<(f64, f64, usize)> = Vec::new();
-        for (mi, me) in master.iter().enumerate() {
+        // Every master edge the test below keeps has its box within this distance of the
+        // slave edge's box; the grid gives them in increasing order, as a scan would.
+        let r = (2.0 * max_gap.abs() + 10.0 * chord + max_side) * (1.0 + 1e-9);
+        grid.query(&([lo[0] - r, lo[1] - r], [hi[0] + r, hi[1] + r]), &mut near);
+        for &mi in &near {
+            let me = &master[mi];
             let (mlo, mhi) = mboxes[mi];
             let reach = 2.0 * max_gap.abs() + 10.0 * chord + (mhi[0] - mlo[0]).max(mhi[1] - mlo[1]);
             if mlo[0] > hi[0] + reach
