@@ -442,3 +442,54 @@ impl Sums {
         m
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `may_hit_within` says `false` only where `project_along` finds no hit in the interval:
+    /// checked over random curved edges and lines, many of them near tangency or far off.
+    #[test]
+    fn skipped_projections_never_land_on_the_interval() {
+        let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
+        let mut rng = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let (mut skipped, mut hits) = (0, 0);
+        for k in 0..200_000 {
+            let scale = [1e-3, 1.0, 30.0][k % 3];
+            let bow = [0.0, 1e-9, 0.05, 0.4][k % 4];
+            let (p, q) = (
+                [rng() * scale, rng() * scale],
+                [rng() * scale, rng() * scale],
+            );
+            let mid = [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
+            let xm = [
+                p,
+                q,
+                [mid[0] + bow * (q[1] - p[1]), mid[1] - bow * (q[0] - p[0])],
+            ];
+            let x = [mid[0] + rng() * scale, mid[1] + rng() * scale];
+            let th = rng() * std::f64::consts::PI;
+            let n = [th.cos(), th.sin()];
+            for r_max in [1.0 + 1e-9, 1.5] {
+                let hit = project_along(&xm, x, n).is_some_and(|(r, _)| r.abs() <= r_max);
+                if hit {
+                    hits += 1;
+                }
+                if !may_hit_within(&xm, x, n, r_max) {
+                    skipped += 1;
+                    assert!(!hit, "case {k}: a hit in [-{r_max}, {r_max}] was skipped");
+                }
+            }
+        }
+        // The test means something: both kinds occur often.
+        assert!(
+            skipped > 100_000 && hits > 50_000,
+            "skipped {skipped}, hits {hits}"
+        );
+    }
+}

@@ -126,7 +126,7 @@ impl EdgeGrid {
     /// increasing order, into `out` (cleared first).
     pub fn query(&self, q: &Aabb, out: &mut Vec<usize>) {
         out.clear();
-        if !(q.0[0] <= q.1[0] && q.0[1] <= q.1[1]) || !self.cell.is_finite() {
+        if !(q.0[0] <= q.1[0] && q.0[1] <= q.1[1] && self.cell.is_finite()) {
             // An empty, unbounded or NaN query, or a grid of one cell: every edge.
             out.extend(0..self.len);
             return;
@@ -144,5 +144,76 @@ impl EdgeGrid {
         }
         out.sort_unstable();
         out.dedup();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator (xorshift) for the test's boxes.
+    fn rng(seed: &mut u64) -> f64 {
+        *seed ^= *seed << 13;
+        *seed ^= *seed >> 7;
+        *seed ^= *seed << 17;
+        (*seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    fn meets(a: &Aabb, b: &Aabb) -> bool {
+        a.0[0] <= b.1[0] && b.0[0] <= a.1[0] && a.0[1] <= b.1[1] && b.0[1] <= a.1[1]
+    }
+
+    #[test]
+    fn queries_hold_every_box_that_meets_them_in_increasing_order() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15;
+        // Edges along an arc (as a contact face is), and scattered ones.
+        let mut boxes: Vec<Aabb> = (0..400)
+            .map(|i| {
+                let (t0, t1) = (i as f64 / 400.0 * 3.0, (i + 1) as f64 / 400.0 * 3.0);
+                let (p, q) = ([t0.cos(), t0.sin()], [t1.cos(), t1.sin()]);
+                (
+                    [p[0].min(q[0]), p[1].min(q[1])],
+                    [p[0].max(q[0]), p[1].max(q[1])],
+                )
+            })
+            .collect();
+        for _ in 0..100 {
+            let (x, y, w, h) = (
+                rng(&mut seed) * 4.0 - 2.0,
+                rng(&mut seed) * 4.0 - 2.0,
+                rng(&mut seed),
+                rng(&mut seed) * 0.01,
+            );
+            boxes.push(([x, y], [x + w, y + h]));
+        }
+        let grid = EdgeGrid::new(&boxes);
+        let mut out = Vec::new();
+        for k in 0..2000 {
+            let (x, y) = (rng(&mut seed) * 5.0 - 2.5, rng(&mut seed) * 5.0 - 2.5);
+            let r = if k % 100 == 0 {
+                f64::INFINITY
+            } else {
+                rng(&mut seed) * 0.3
+            };
+            let q = ([x - r, y - r], [x + r, y + r]);
+            grid.query(&q, &mut out);
+            assert!(
+                out.windows(2).all(|w| w[0] < w[1]),
+                "increasing, no repeats"
+            );
+            for (i, b) in boxes.iter().enumerate() {
+                if meets(b, &q) {
+                    assert!(
+                        out.binary_search(&i).is_ok(),
+                        "box {i} meets query {k} but is missing"
+                    );
+                }
+            }
+        }
+        // Degenerate inputs: no boxes, one point.
+        EdgeGrid::new(&[]).query(&([0.0; 2], [1.0; 2]), &mut out);
+        assert!(out.is_empty());
+        EdgeGrid::new(&[([1.0, 1.0], [1.0, 1.0])]).query(&([0.0; 2], [1.0; 2]), &mut out);
+        assert_eq!(out, vec![0]);
     }
 }
