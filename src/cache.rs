@@ -31,7 +31,6 @@
 use crate::case::Case;
 use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 /// Version of the file format and of the meaning of the sections. Bump it when either changes.
 pub const FORMAT: u32 = 1;
@@ -306,7 +305,7 @@ pub enum Words {
     Usize(Vec<usize>),
     F64(Vec<f64>),
     /// Floats shared with the model (the factor values, written while the run goes on).
-    Shared(Arc<Vec<f64>>),
+    Shared(crate::linsolve::SharedValues),
 }
 
 impl Words {
@@ -352,7 +351,7 @@ impl Words {
             Words::U64(v) => chunks!(v, |x: u64| x),
             Words::Usize(v) => chunks!(v, |x: usize| x as u64),
             Words::F64(v) => chunks!(v, |x: f64| x),
-            Words::Shared(v) => chunks!(v.as_slice(), |x: f64| x),
+            Words::Shared(v) => chunks!(&v[..], |x: f64| x),
         }
         Ok(())
     }
@@ -370,7 +369,7 @@ impl Words {
     pub fn into_f64(self) -> Option<Vec<f64>> {
         match self {
             Words::F64(v) => Some(v),
-            Words::Shared(v) => Some(Arc::try_unwrap(v).unwrap_or_else(|a| (*a).clone())),
+            Words::Shared(v) => Some(v.to_vec()),
             _ => None,
         }
     }
@@ -472,6 +471,8 @@ pub struct Reader {
     file: std::fs::File,
     table: Vec<SectionInfo>,
     next: usize,
+    /// Byte offset of the next section in the file.
+    pos: u64,
     /// Size of the file in bytes.
     pub bytes: u64,
 }
@@ -494,6 +495,7 @@ impl Reader {
         };
         match Self::header(&mut file, key) {
             Ok((table, bytes)) => Open::Ready(Reader {
+                pos: 32 + 24 * table.len() as u64 + 8,
                 file,
                 table,
                 next: 0,
@@ -579,6 +581,7 @@ impl Reader {
             .get(self.next)
             .ok_or_else(|| "fewer sections than expected".to_string())?;
         self.next += 1;
+        self.pos += 8 * s.words;
         let n = usize::try_from(s.words).map_err(|_| "section too large".to_string())?;
         let mut h = Xxh64::new(0);
         let mut buf = vec![0u8; CHUNK.min(8 * n)];
@@ -622,6 +625,98 @@ impl Reader {
             ));
         }
         Ok((s.tag, words))
+    }
+}
+
+impl Reader {
+    /// Maps the next section, of floats, into memory instead of reading it (the file's pages
+    /// are used in place), and checks it against its hash: (tag, words). Falls back to
+    /// [`Self::read_next`] where the file's bytes cannot be viewed as floats in place (a
+    /// big-endian machine) or the mapping fails.
+    ///
+    /// The mapping lasts as long as the words. Entries are replaced by renaming a new file over
+    /// them and evicted by deleting them, neither of which changes a mapped file; a file cut
+    /// short by another program while a run reads it would stop that run (`SIGBUS`).
+    pub fn map_next(&mut self) -> Result<(u32, crate::linsolve::FactorValues), String> {
+        use crate::linsolve::FactorValues;
+        let read = |r: &mut Reader| -> Result<(u32, FactorValues), String> {
+            let (tag, words) = r.read_next()?;
+            let v = words.into_f64().ok_or_else(|| {
+                "inconsistent (a section of integers where floats belong)".to_string()
+            })?;
+            Ok((tag, FactorValues::Owned(v)))
+        };
+        let Some(s) = self.table.get(self.next) else {
+            return Err("fewer sections than expected".into());
+        };
+        if cfg!(target_endian = "big") || s.kind != 2 {
+            return read(self);
+        }
+        let (tag, words, hash) = (s.tag, s.words, s.hash);
+        let (Ok(offset), Ok(len)) = (usize::try_from(self.pos), usize::try_from(words)) else {
+            return Err("section too large".into());
+        };
+        // SAFETY: the file is only read; see the note above on files changed while mapped.
+        let Ok(map) = (unsafe { memmap2::MmapOptions::new().map(&self.file) }) else {
+            return read(self);
+        };
+        if map.len() < offset + 8 * len {
+            return Err(format!(
+                "truncated: {} bytes, its sections need {}",
+                map.len(),
+                offset + 8 * len
+            ));
+        }
+        // The pages are read once, in order, by the hash.
+        #[cfg(unix)]
+        let _ = map.advise(memmap2::Advice::Sequential);
+        let mapped = MappedWords { map, offset, len };
+        let mut h = Xxh64::new(0);
+        h.update(mapped.bytes());
+        if h.finish() != hash {
+            return Err(format!(
+                "corrupt data (checksum mismatch in section {} of {})",
+                self.next + 1,
+                self.table.len()
+            ));
+        }
+        #[cfg(unix)]
+        let _ = mapped.map.advise(memmap2::Advice::Normal);
+        self.next += 1;
+        self.pos += 8 * words;
+        self.file
+            .seek(SeekFrom::Start(self.pos))
+            .map_err(|e| format!("cannot be read: {e}"))?;
+        Ok((tag, FactorValues::Mapped(mapped)))
+    }
+}
+
+/// A section of floats mapped from a cache file (see [`Reader::map_next`]).
+pub struct MappedWords {
+    map: memmap2::Mmap,
+    /// Byte offset of the section in the file (a multiple of 8).
+    offset: usize,
+    /// Number of floats.
+    len: usize,
+}
+
+impl MappedWords {
+    fn bytes(&self) -> &[u8] {
+        &self.map[self.offset..self.offset + 8 * self.len]
+    }
+
+    /// The floats, in place.
+    pub fn as_f64(&self) -> &[f64] {
+        let b = self.bytes();
+        // Every section starts at a multiple of 8 bytes from the start of the file, and a
+        // mapping starts on a page boundary, so the floats are aligned.
+        assert!(
+            cfg!(target_endian = "little") && (b.as_ptr() as usize).is_multiple_of(8),
+            "mapped floats must be aligned little-endian words"
+        );
+        // SAFETY: aligned, in bounds, little-endian f64 words (checked above); any bit pattern
+        // is a valid f64; the mapping lives as long as `self`.
+        unsafe { std::slice::from_raw_parts(b.as_ptr().cast::<f64>(), self.len) }
     }
 }
 

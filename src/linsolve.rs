@@ -32,6 +32,27 @@ fn sym<'a>(
     SymbolicSparseColMatRef::new_checked(n, n, &col_ptr[..=n], None, &row_idx[..col_ptr[n]])
 }
 
+/// The values of a numeric factorisation: computed in this run, or mapped from a model-cache
+/// file and read in place ([`crate::cache::Reader::map_next`]), which spares a hit the copy
+/// of hundreds of MB into fresh memory.
+pub enum FactorValues {
+    Owned(Vec<f64>),
+    Mapped(crate::cache::MappedWords),
+}
+
+impl std::ops::Deref for FactorValues {
+    type Target = [f64];
+    fn deref(&self) -> &[f64] {
+        match self {
+            FactorValues::Owned(v) => v,
+            FactorValues::Mapped(m) => m.as_f64(),
+        }
+    }
+}
+
+/// Factor values shared between a factorisation and a model-cache writer.
+pub type SharedValues = std::sync::Arc<FactorValues>;
+
 /// A sparse Cholesky factorisation `K = L Lᵀ` whose ordering puts a chosen set of *retained*
 /// unknowns last, so that the trailing block of `L` is the Cholesky factor of the Schur
 /// complement on them:
@@ -44,7 +65,7 @@ fn sym<'a>(
 pub struct PartialCholesky {
     symbolic: std::sync::Arc<faer::sparse::linalg::cholesky::SymbolicCholesky<usize>>,
     /// The factor's values, shared with a model-cache writer ([`crate::cache`]).
-    values: std::sync::Arc<Vec<f64>>,
+    values: SharedValues,
     n: usize,
     n_r: usize,
     /// `L_RR`, dense lower triangular, column-major `n_r × n_r`.
@@ -186,12 +207,12 @@ impl PartialSymbolic {
                     FactorError::NotPositiveDefinite { pivot: index, n }
                 }
             })?;
-        self.from_values(std::sync::Arc::new(l))
+        self.from_values(std::sync::Arc::new(FactorValues::Owned(l)))
     }
 
     /// The factorisation with the values of an earlier numeric factorisation on this
     /// analysis ([`PartialCholesky::values`]), and extraction of `L_RR`.
-    pub fn from_values(&self, l: std::sync::Arc<Vec<f64>>) -> Result<PartialCholesky, FactorError> {
+    pub fn from_values(&self, l: SharedValues) -> Result<PartialCholesky, FactorError> {
         use faer::sparse::linalg::cholesky::{SymbolicCholeskyRaw, supernodal::SupernodalLltRef};
         let (n, n_r) = (self.n, self.n_r);
         let n_i = n - n_r;
@@ -248,7 +269,7 @@ impl PartialCholesky {
     }
 
     /// The values of the factor (shared, not copied).
-    pub fn values(&self) -> std::sync::Arc<Vec<f64>> {
+    pub fn values(&self) -> SharedValues {
         self.values.clone()
     }
 
@@ -299,7 +320,7 @@ pub struct SaddleSymbolic {
 pub struct SaddleFactor {
     symbolic: std::sync::Arc<faer::sparse::linalg::cholesky::SymbolicCholesky<usize>>,
     /// The factor's values, shared with a model-cache writer ([`crate::cache`]).
-    values: std::sync::Arc<Vec<f64>>,
+    values: SharedValues,
     n: usize,
     m: usize,
 }
@@ -545,7 +566,7 @@ impl SaddleSymbolic {
                     FactorError::NotPositiveDefinite { pivot: index, n }
                 }
             })?;
-        let f = self.from_values(std::sync::Arc::new(l))?;
+        let f = self.from_values(std::sync::Arc::new(FactorValues::Owned(l)))?;
         // K̂ must be positive definite: every pivot of its block positive (a body that nothing
         // holds gives a vanishing or negative one).
         let sn = supernodal(&f.symbolic)?;
@@ -571,7 +592,7 @@ impl SaddleSymbolic {
 
     /// The factorisation with the values of an earlier numeric factorisation on this analysis
     /// ([`SaddleFactor::values`]).
-    pub fn from_values(&self, l: std::sync::Arc<Vec<f64>>) -> Result<SaddleFactor, FactorError> {
+    pub fn from_values(&self, l: SharedValues) -> Result<SaddleFactor, FactorError> {
         if l.len() != self.inner.len_val() {
             return Err(FactorError::FactorLength {
                 len: l.len(),
@@ -609,7 +630,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 
 impl SaddleFactor {
     /// The values of the factor (shared, not copied).
-    pub fn values(&self) -> std::sync::Arc<Vec<f64>> {
+    pub fn values(&self) -> SharedValues {
         self.values.clone()
     }
 

@@ -286,7 +286,7 @@ fn restore(
     // The analysis from the stored ordering, while a second thread reads the factor values.
     let y_free = y.map(|y| y.free(n_i));
     let (analysis, analyse_s, values) = std::thread::scope(|s| {
-        let values = s.spawn(move || reader.read_next());
+        let values = s.spawn(move || reader.map_next());
         let t = Instant::now();
         let analysis = match &y_free {
             Some(yf) => SaddleSymbolic::with_ordering(n, &col_ptr, &row_idx, yf, &ordering)
@@ -301,7 +301,7 @@ fn restore(
         (analysis, analyse_s, values)
     });
     let (_, values) = values?;
-    let values = Arc::new(values.into_f64().ok_or_else(|| bad("factor values"))?);
+    let values = Arc::new(values);
     let chol = match analysis.map_err(|e| format!("unusable: {e}"))? {
         Analysis::Saddle(s) => s.from_values(values).map(Factor::Saddle),
         Analysis::Partial(s) => s.from_values(values).map(Factor::Partial),
