@@ -382,7 +382,7 @@ fn order_leading(
 /// Free DOFs from which a contact model's DOFs are ordered by nested dissection rather than
 /// AMD: below it AMD's cheaper ordering wins, above it nested dissection's smaller factor does
 /// (`cargo bench --bench scaling` with `STICKSLIP_ORDERING`; docs/benchmarks.md).
-pub const ND_FROM: usize = 250_000;
+pub const ND_FROM: usize = 100_000;
 
 /// The ordering policy: `auto` (AMD below [`ND_FROM`] free DOFs, nested dissection from it),
 /// or forced by the environment variable `STICKSLIP_ORDERING=amd` or `=nd` (for the

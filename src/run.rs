@@ -13,6 +13,7 @@ use crate::output::series::{Background, Series, StepOutput, write_file};
 use crate::report::{Summary, end_summary, history_csv, print_warnings, summarise};
 use crate::restart::{self, SavedRun};
 use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, sync_channel};
 
 /// Options of a run from the command line.
 #[derive(Clone, Debug, Default)]
@@ -167,8 +168,9 @@ pub fn run_model(
         let mut writer = Background::spawn(scope, series);
         // The last converged step not yet written (`output.every` > 1).
         let mut unwritten: Option<StepOutput> = None;
-        // The last step and its recovered displacements (runs with contact).
-        let mut last_u: Option<(usize, Vec<f64>)> = None;
+        // The last step and where its recovered displacements come from (runs with contact:
+        // the writer recovers them with the steps it writes and sends them back).
+        let mut last_u: Option<(usize, Receiver<Vec<f64>>)> = None;
         let mut on_step = |ev: &StepEvent| {
             progress.step(ev);
             if let Some(m) = energy.as_mut() {
@@ -179,22 +181,22 @@ pub fn run_model(
             }
             // A write that failed stops the run at its next step.
             writer.check()?;
-            // The last step's displacements are recovered here, once, for its output and
-            // for the checks of the summary, while the writer is still busy with the steps
-            // before it.
-            let u = match (ev.u, ev.contact) {
-                (None, Some(st)) if ev.last => {
-                    let u = model.contact_displacement(ev.scale, st);
-                    last_u = Some((ev.step, u.clone()));
-                    Some(u)
+            // The last step's displacements are recovered once, by the writer (with the steps
+            // queued before it), for its output and for the checks of the summary.
+            let reply = match (ev.u, ev.contact) {
+                (None, Some(_)) if ev.last => {
+                    let (tx, rx) = sync_channel(1);
+                    last_u = Some((ev.step, rx));
+                    Some(tx)
                 }
-                _ => ev.u.cloned(),
+                _ => None,
             };
             let out = StepOutput {
+                reply,
                 step: ev.step,
                 time: ev.time,
                 scale: ev.scale,
-                u,
+                u: ev.u.cloned(),
                 contact: ev.contact.cloned(),
                 // The state to resume from, written after the step's files.
                 state: ev.checkpoint.map(|c| SavedRun {
@@ -230,11 +232,12 @@ pub fn run_model(
         // The summary and its checks (a recovery solve of their own) while the writer writes
         // the last steps.
         let mut sim = sim;
-        if let Some((step, u)) = last_u
+        if let Some((step, rx)) = last_u
             && sim.last_u.is_none()
             && sim.records.len() == step
         {
-            sim.last_u = Some(u);
+            // None when the writer stopped on an error first (reported by `finish` below).
+            sim.last_u = rx.recv().ok();
         }
         let solve_s = sim.solve_s;
         let history = history_csv(&sim.records);

@@ -126,20 +126,57 @@ pub fn contact_csv(model: &Model, st: &State) -> String {
     output::csv(&header, &rows, &["status"])
 }
 
-/// The bodies dataset of one step: displacement, stresses, von Mises, body id
-/// (`compress`: zlib-compressed arrays).
-pub fn bodies_vtu(model: &Model, u: &[f64], compress: bool) -> Vec<u8> {
-    let mut index = vec![usize::MAX; model.mesh.nodes.len()];
-    let mut points = Vec::new();
-    for (n, &a) in model.active.iter().enumerate() {
-        if a {
-            index[n] = points.len();
-            points.push(model.mesh.nodes[n]);
+/// The parts of the bodies dataset that are the same at every step: the active nodes (as
+/// points) and the cells over them, with each cell's body.
+pub struct BodiesMesh {
+    points: Vec<[f64; 2]>,
+    cells: Vec<Vec<usize>>,
+    body: Vec<f64>,
+}
+
+impl BodiesMesh {
+    pub fn new(model: &Model) -> BodiesMesh {
+        let mut index = vec![usize::MAX; model.mesh.nodes.len()];
+        let mut points = Vec::new();
+        for (n, &a) in model.active.iter().enumerate() {
+            if a {
+                index[n] = points.len();
+                points.push(model.mesh.nodes[n]);
+            }
+        }
+        let cells = model
+            .elems
+            .iter()
+            .map(|(e, _)| {
+                model.mesh.triangles[*e]
+                    .nodes
+                    .iter()
+                    .map(|&n| index[n])
+                    .collect()
+            })
+            .collect();
+        let body = model.elem_body.iter().map(|&b| b as f64).collect();
+        BodiesMesh {
+            points,
+            cells,
+            body,
         }
     }
+}
+
+/// The bodies dataset of one step: displacement, stresses, von Mises, body id
+/// (`compress`: zlib-compressed arrays).
+pub fn bodies_vtu(model: &Model, mesh: &BodiesMesh, u: &[f64], compress: bool) -> Vec<u8> {
     let stress = model.nodal_stresses(u);
-    let mut disp = Vec::with_capacity(points.len() * 3);
-    let (mut sxx, mut syy, mut sxy, mut szz, mut vm) = (vec![], vec![], vec![], vec![], vec![]);
+    let n = mesh.points.len();
+    let mut disp = Vec::with_capacity(n * 3);
+    let (mut sxx, mut syy, mut sxy, mut szz, mut vm) = (
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+    );
     for (n, &a) in model.active.iter().enumerate() {
         if !a {
             continue;
@@ -153,21 +190,9 @@ pub fn bodies_vtu(model: &Model, u: &[f64], compress: bool) -> Vec<u8> {
         szz.push(s[3]);
         vm.push(crate::elasticity::von_mises(s[0], s[1], s[2], s[3]));
     }
-    let cells: Vec<Vec<usize>> = model
-        .elems
-        .iter()
-        .map(|(e, _)| {
-            model.mesh.triangles[*e]
-                .nodes
-                .iter()
-                .map(|&n| index[n])
-                .collect()
-        })
-        .collect();
-    let body: Vec<f64> = model.elem_body.iter().map(|&b| b as f64).collect();
     vtu::unstructured(
-        &points,
-        &cells,
+        &mesh.points,
+        &mesh.cells,
         vtu::Kind::Tri6,
         &[
             vtu::Field::vector("displacement", disp),
@@ -177,7 +202,7 @@ pub fn bodies_vtu(model: &Model, u: &[f64], compress: bool) -> Vec<u8> {
             vtu::Field::scalar("stress_zz", szz),
             vtu::Field::scalar("von_mises", vm),
         ],
-        &[vtu::Field::scalar("body_id", body)],
+        &[vtu::Field::scalar("body_id", mesh.body.clone())],
         compress,
     )
 }

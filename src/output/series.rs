@@ -3,11 +3,14 @@
 //! a run stopped at any point leaves a series ParaView opens; then the step's restart state.
 //!
 //! The steps are written by a background thread ([`Background`]) while the driver solves the
-//! next ones: it takes the steps in order from a channel of depth one and writes exactly the
-//! files, in exactly the order, that writing in the loop would, so a run's files do not depend
-//! on it. Its first error stops it; the driver sees that error at its next step, and stops.
+//! next ones: it takes the steps in order from a channel of depth [`BATCH`] and writes exactly
+//! the files, in exactly the order, that writing in the loop would, so a run's files do not
+//! depend on it. When it falls behind it takes the queued steps together: their displacement
+//! fields come from one block solve (which reads the factor once for all, and gives each field
+//! bit for bit), and their bodies datasets are encoded in parallel. Its first error stops it;
+//! the driver sees that error at its next step, and stops.
 
-use super::fields::{bodies_vtu, contact_csv, contact_vtu};
+use super::fields::{BodiesMesh, bodies_vtu, contact_csv, contact_vtu};
 use super::{PvdEntry, pvd};
 use crate::contact::solver::State;
 use crate::error::RunError;
@@ -38,7 +41,13 @@ pub struct StepOutput {
     /// The restart state to write after the step's files; its `.pvd` entries are filled in
     /// with those written so far.
     pub state: Option<SavedRun>,
+    /// Where to send the step's displacement field once recovered (the driver's checks of the
+    /// last step use it rather than solving again).
+    pub reply: Option<SyncSender<Vec<f64>>>,
 }
+
+/// Steps the writer takes at once at most, and the depth of its channel.
+pub const BATCH: usize = 2;
 
 /// The writer of a run's series of steps.
 pub struct Series<'a> {
@@ -47,6 +56,8 @@ pub struct Series<'a> {
     stem: &'a str,
     /// zlib-compressed `.vtu` arrays (`output.compress`).
     compress: bool,
+    /// The points and cells of the bodies dataset (built at the first write).
+    mesh: Option<BodiesMesh>,
     entries: Vec<PvdEntry>,
     /// Seconds spent writing so far.
     pub seconds: f64,
@@ -59,6 +70,7 @@ impl<'a> Series<'a> {
             dir,
             stem,
             compress,
+            mesh: None,
             entries: Vec::new(),
             seconds: 0.0,
         }
@@ -75,23 +87,62 @@ impl<'a> Series<'a> {
         &self.entries
     }
 
-    /// Writes the files of one converged step and rewrites the `.pvd` (the bodies' fields from
-    /// the free solution or, with contact, recovered from the contact state), then its restart
-    /// state if it has one.
-    pub fn write(&mut self, s: StepOutput) -> Result<(), RunError> {
+    /// Writes the files of converged steps, in order: per step its bodies dataset (the
+    /// fields from the free solution or, with contact, recovered from the contact state), its
+    /// contact dataset and CSV, the rewritten `.pvd`, then its restart state if it has one.
+    pub fn write(&mut self, steps: Vec<StepOutput>) -> Result<(), RunError> {
+        use rayon::prelude::*;
         let t = Instant::now();
+        let model = self.model;
+        // The fields recovered from contact states: one block solve for the batch.
+        let states: Vec<(f64, &State)> = steps
+            .iter()
+            .filter(|s| s.u.is_none())
+            .map(|s| {
+                let st = s.contact.as_ref();
+                (
+                    s.scale,
+                    st.expect("a step has a solution or a contact state"),
+                )
+            })
+            .collect();
+        let recovered = if states.is_empty() {
+            Vec::new()
+        } else {
+            model.contact_displacements(&states)
+        };
+        let mut recovered = recovered.into_iter();
+        let fields: Vec<std::borrow::Cow<[f64]>> = steps
+            .iter()
+            .map(|s| match &s.u {
+                Some(u) => std::borrow::Cow::Borrowed(u.as_slice()),
+                None => std::borrow::Cow::Owned(recovered.next().expect("one field per state")),
+            })
+            .collect();
+        for (s, u) in steps.iter().zip(&fields) {
+            if let Some(tx) = &s.reply {
+                // The driver may have stopped waiting (it failed): nothing to do then.
+                let _ = tx.send(u.to_vec());
+            }
+        }
+        let mesh = &*self.mesh.get_or_insert_with(|| BodiesMesh::new(model));
+        let compress = self.compress;
+        let bodies: Vec<Vec<u8>> = fields
+            .par_iter()
+            .map(|u| bodies_vtu(model, mesh, u, compress))
+            .collect();
+        for (s, bytes) in steps.into_iter().zip(bodies) {
+            self.write_files(s, &bytes)?;
+        }
+        self.seconds += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Writes one step's files given its bodies dataset.
+    fn write_files(&mut self, s: StepOutput, bodies: &[u8]) -> Result<(), RunError> {
         let (model, stem, step) = (self.model, self.stem, s.step);
         let name = format!("{stem}_{step:04}.vtu");
-        let recovered;
-        let u = match (&s.u, &s.contact) {
-            (Some(u), _) => u,
-            (None, Some(st)) => {
-                recovered = model.contact_displacement(s.scale, st);
-                &recovered
-            }
-            (None, None) => unreachable!("a step has a solution or a contact state"),
-        };
-        write_file(&self.dir.join(&name), &bodies_vtu(model, u, self.compress))?;
+        write_file(&self.dir.join(&name), bodies)?;
         self.entries.push(PvdEntry {
             time: s.time,
             part: 0,
@@ -127,13 +178,12 @@ impl<'a> Series<'a> {
                     .as_bytes(),
             )?;
         }
-        self.seconds += t.elapsed().as_secs_f64();
         Ok(())
     }
 }
 
-/// A [`Series`] written on a thread of its own, fed through a channel of depth one: the
-/// driver hands it a step and goes on, and waits only when a step is still queued.
+/// A [`Series`] written on a thread of its own, fed through a channel of depth [`BATCH`]: the
+/// driver hands it a step and goes on, and waits only when the channel is full.
 pub struct Background<'scope> {
     tx: SyncSender<StepOutput>,
     /// The writer thread: its busy seconds, or its first error. `None` once joined.
@@ -145,13 +195,21 @@ pub struct Background<'scope> {
 impl<'scope> Background<'scope> {
     /// Starts the writer thread of `series` in `scope`.
     pub fn spawn<'env>(scope: &'scope Scope<'scope, 'env>, mut series: Series<'env>) -> Self {
-        let (tx, rx): (_, Receiver<StepOutput>) = sync_channel(1);
+        let (tx, rx): (_, Receiver<StepOutput>) = sync_channel(BATCH);
         let handle = std::thread::Builder::new()
             .name("stickslip-writer".into())
             .spawn_scoped(scope, move || {
-                for step in rx {
+                while let Ok(first) = rx.recv() {
+                    // The steps queued behind it go in the same batch.
+                    let mut batch = vec![first];
+                    while batch.len() < BATCH {
+                        match rx.try_recv() {
+                            Ok(s) => batch.push(s),
+                            Err(_) => break,
+                        }
+                    }
                     // The first error ends the thread (and drops the receiver).
-                    series.write(step)?;
+                    series.write(batch)?;
                 }
                 Ok(series.seconds)
             })
