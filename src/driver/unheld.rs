@@ -14,12 +14,8 @@ use crate::model::Model;
 fn separating_force(model: &Model, ctl: &[Control; 2]) -> Option<(usize, usize, Option<f64>)> {
     let (body, sep) = model.pilot_separation?;
     let k = if sep[0].abs() > sep[1].abs() { 0 } else { 1 };
-    let e_max = model
-        .elems
-        .iter()
-        .map(|(_, m)| m.e.abs())
-        .fold(0.0, f64::max);
-    let round_off = 1e-12 * e_max * model.mesh.diameter();
+    let (size, e_max) = model.scales();
+    let round_off = 1e-12 * e_max * size;
     let f = match ctl[k] {
         Control::Force(f) if f.abs() <= round_off => Some(0.0),
         Control::Force(f) => Some(f * sep[k].signum()),
@@ -49,7 +45,7 @@ pub(super) fn unheld_after(
     ctl: &[Control; 2],
     st: &State,
 ) -> Option<StepError> {
-    let size = model.mesh.diameter();
+    let size = model.scales().0;
     let u = st.pilot_u[0].hypot(st.pilot_u[1]);
     let limit = crate::checks::DISPLACEMENT_ERROR;
     if model.dofs.pilot.is_some() && (u.is_nan() || u > limit * size) {

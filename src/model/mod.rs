@@ -106,6 +106,9 @@ pub struct Model {
     /// [`Model::keep_element_stiffness`] has been called (a sweep does, so that the
     /// self-checks of each of its rows do not integrate them again).
     element_k: std::sync::OnceLock<Vec<[f64; 144]>>,
+    /// The mesh's diameter and the largest Young's modulus of the bodies in use (see
+    /// [`Model::scales`]).
+    scales: std::sync::OnceLock<(f64, f64)>,
 }
 
 impl Model {
@@ -372,6 +375,21 @@ impl Model {
             cache: cache_report,
             cache_job,
             element_k: std::sync::OnceLock::new(),
+            scales: std::sync::OnceLock::new(),
+        })
+    }
+
+    /// The mesh's diameter and the largest Young's modulus of the bodies in use: the scales
+    /// of the round-off limits that the per-step checks of the driver use (computed once; the
+    /// diameter scans every node, which per step and per sweep row added up).
+    pub fn scales(&self) -> (f64, f64) {
+        *self.scales.get_or_init(|| {
+            let e_max = self
+                .elems
+                .iter()
+                .map(|(_, m)| m.e.abs())
+                .fold(0.0, f64::max);
+            (self.mesh.diameter(), e_max)
         })
     }
 
