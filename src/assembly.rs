@@ -121,23 +121,63 @@ pub fn assemble_stiffness(
         .map(|(e, mat)| elasticity::element_stiffness(&mesh.tri_coords(*e), mat))
         .collect();
     k.values.iter_mut().for_each(|v| *v = 0.0);
-    let mut f = vec![0.0; dofs.n_free()];
-    for ((e, _), ke) in elems.iter().zip(&kes) {
-        let d = dofs.element_dofs(&mesh.triangles[*e].nodes);
-        for i in 0..12 {
-            let Dof::Free(r) = d[i] else { continue };
-            for j in 0..12 {
-                match d[j] {
-                    Dof::Free(c) if r <= c => {
-                        let p = k.position(r, c);
-                        k.values[p] += ke[i * 12 + j];
+    let n = dofs.n_free();
+    let mut f = vec![0.0; n];
+    // The scatter in parallel: each thread owns a range of columns of K (about equal numbers of
+    // nonzeros) and the same range of rows of f, and goes through all elements in order adding
+    // only to what it owns, so every entry receives its terms in element order, as a serial
+    // scatter adds them, whatever the number of threads.
+    let (col_ptr, row_idx) = (&k.col_ptr, &k.row_idx);
+    let nnz = col_ptr[n];
+    let parts = rayon::current_num_threads().clamp(1, n.max(1));
+    // Non-decreasing, from 0 to n (every column and row in one range).
+    let bounds: Vec<usize> = (0..=parts)
+        .map(|t| match t {
+            t if t == parts => n,
+            t => col_ptr[..=n]
+                .partition_point(|&p| p < t * nnz / parts)
+                .min(n),
+        })
+        .collect();
+    let mut values: Vec<&mut [f64]> = Vec::with_capacity(parts);
+    let mut forces: Vec<&mut [f64]> = Vec::with_capacity(parts);
+    let (mut v_rest, mut f_rest) = (&mut k.values[..], &mut f[..]);
+    for t in 0..parts {
+        let (lo, hi) = (bounds[t], bounds[t + 1]);
+        let (v, vr) = v_rest.split_at_mut(col_ptr[hi] - col_ptr[lo]);
+        let (fp, fr) = f_rest.split_at_mut(hi - lo);
+        values.push(v);
+        forces.push(fp);
+        (v_rest, f_rest) = (vr, fr);
+    }
+    values
+        .into_par_iter()
+        .zip(forces)
+        .enumerate()
+        .for_each(|(t, (vals, fs))| {
+            let (lo, hi) = (bounds[t], bounds[t + 1]);
+            let base = col_ptr[lo];
+            for ((e, _), ke) in elems.iter().zip(&kes) {
+                let d = dofs.element_dofs(&mesh.triangles[*e].nodes);
+                for i in 0..12 {
+                    let Dof::Free(r) = d[i] else { continue };
+                    for j in 0..12 {
+                        match d[j] {
+                            Dof::Free(c) if r <= c && (lo..hi).contains(&c) => {
+                                let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+                                let p =
+                                    col_ptr[c] + rows.binary_search(&r).expect("entry in pattern");
+                                vals[p - base] += ke[i * 12 + j];
+                            }
+                            Dof::Fixed(q) if (lo..hi).contains(&r) => {
+                                fs[r - lo] -= ke[i * 12 + j] * dofs.prescribed[q];
+                            }
+                            _ => {}
+                        }
                     }
-                    Dof::Fixed(q) => f[r] -= ke[i * 12 + j] * dofs.prescribed[q],
-                    _ => {}
                 }
             }
-        }
-    }
+        });
     f
 }
 

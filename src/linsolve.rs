@@ -32,6 +32,17 @@ fn sym<'a>(
     SymbolicSparseColMatRef::new_checked(n, n, &col_ptr[..=n], None, &row_idx[..col_ptr[n]])
 }
 
+/// The parallelism of the sparse numeric factorisations and of the product that forms the
+/// Delassus operator: all of rayon's threads. Their results do not depend on the number of
+/// threads (`tests/determinism.rs`), unlike some of faer's dense kernels, which the program
+/// runs sequentially (faer's global parallelism, set in `main`).
+pub fn factor_parallelism() -> faer::Par {
+    match rayon::current_num_threads() {
+        0 | 1 => faer::Par::Seq,
+        n => faer::Par::rayon(n),
+    }
+}
+
 /// The values of a numeric factorisation: computed in this run, or mapped from a model-cache
 /// file and read in place ([`crate::cache::Reader::map_next`]), which spares a hit the copy
 /// of hundreds of MB into fresh memory.
@@ -182,7 +193,7 @@ impl PartialSymbolic {
         use faer::dyn_stack::{MemBuffer, MemStack};
         let n = self.n;
         let a = SparseColMatRef::new(sym(n, col_ptr, row_idx), &values[..col_ptr[n]]);
-        let par = faer::get_global_parallelism();
+        let par = factor_parallelism();
         let mut l = vec![0.0; self.inner.len_val()];
         let mut mem = MemBuffer::try_new(
             self.inner
@@ -541,7 +552,7 @@ impl SaddleSymbolic {
             }
         }
         let a = SparseColMatRef::new(sym(size, &self.col_ptr, &self.row_idx), &values);
-        let par = faer::get_global_parallelism();
+        let par = factor_parallelism();
         let mut l = vec![0.0; self.inner.len_val()];
         let mut mem = MemBuffer::try_new(
             self.inner
@@ -804,7 +815,7 @@ impl SaddleFactor {
             l.transpose(),
             BlockStructure::UnitTriangularUpper,
             -1.0,
-            faer::get_global_parallelism(),
+            factor_parallelism(),
         );
         for j in 0..m {
             for i in j + 1..m {

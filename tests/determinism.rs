@@ -1,7 +1,9 @@
 //! The same case run on one thread and on two gives bit-identical results: every
 //! `contact_NNNN.csv` and every `.vtu` file (bodies and contact surface) must be byte for byte
-//! the same. Case: `cases/vm272_cm.json` (normal load, then Cattaneo–Mindlin tangential
-//! loading, 11 steps) on the mesh `vm272_L2`.
+//! the same. Cases: `cases/vm272_cm.json` (normal load, then Cattaneo–Mindlin tangential
+//! loading, 11 steps) on the mesh `vm272_L2`, and `cases/fig2.json` as shipped (L5), where the
+//! factorisation and the contact Newton's dense kernels are large enough for faer to run them
+//! in parallel (before the dense kernels were kept sequential, this one differed at 1e-10).
 //!
 //! On a difference the test names the file, and for a CSV the column, the row and the largest
 //! absolute and relative difference; for a `.vtu` the data array of its appended section (or
@@ -22,6 +24,8 @@ fn run(dir: &Path, case: &Path, threads: usize) -> PathBuf {
         "--threads",
         &threads.to_string(),
         "--quiet",
+        // Both runs build the model: a cache hit would skip the factorisation.
+        "--no-cache",
     ]);
     assert!(code == 0, "--threads {threads}: exit {code}: {err}");
     out
@@ -88,11 +92,12 @@ fn vtu_array_at(a: &[u8], pos: usize) -> String {
     }
 }
 
-#[test]
-fn one_and_two_threads_give_identical_files() {
-    let dir = tempdir("determinism");
-    let v = shipped_case_on("vm272_cm.json", "vm272_L2.msh");
-    let case = dir.join("vm272_cm.json");
+/// Runs the shipped case `name` on `mesh` with one thread and with two and asserts that the
+/// files match (expecting `csvs` contact CSVs and `vtus` .vtu files); returns their counts.
+fn one_and_two_threads(name: &str, mesh: &str, csvs: usize, vtus: usize) -> (usize, usize) {
+    let dir = tempdir(&format!("determinism-{mesh}"));
+    let v = shipped_case_on(name, mesh);
+    let case = dir.join(name);
     std::fs::write(&case, serde_json::to_string_pretty(&v).unwrap()).unwrap();
 
     let o1 = run(&dir, &case, 1);
@@ -109,10 +114,13 @@ fn one_and_two_threads_give_identical_files() {
     }
     let (f1, f2) = (compared_files(&o1), compared_files(&o2));
     assert_eq!(f1, f2, "the two runs wrote different sets of files");
+    let counts = (
+        f1.iter().filter(|n| n.ends_with(".csv")).count(),
+        f1.iter().filter(|n| n.ends_with(".vtu")).count(),
+    );
     assert!(
-        f1.iter().filter(|n| n.ends_with(".csv")).count() == 11
-            && f1.iter().filter(|n| n.ends_with(".vtu")).count() == 22,
-        "expected 11 contact CSVs and 22 .vtu files, got {f1:?}"
+        counts == (csvs, vtus),
+        "expected {csvs} contact CSVs and {vtus} .vtu files, got {f1:?}"
     );
     let mut diffs = Vec::new();
     for name in &f1 {
@@ -173,14 +181,32 @@ fn one_and_two_threads_give_identical_files() {
         diffs.join("\n")
     );
     let _ = std::fs::remove_dir_all(&dir);
+    counts
+}
+
+#[test]
+fn one_and_two_threads_give_identical_files() {
+    let (csvs, vtus) = one_and_two_threads("vm272_cm.json", "vm272_L2.msh", 11, 22);
     validation_row(
         "320-determinism",
         "the same case with `--threads 1` and `--threads 2`",
         "—",
         &format!(
-            "byte-identical contact CSV and VTU files ({} CSVs, {} .vtu), and history.csv without its wall-clock column",
-            f1.iter().filter(|n| n.ends_with(".csv")).count(),
-            f1.iter().filter(|n| n.ends_with(".vtu")).count()
+            "byte-identical contact CSV and VTU files ({csvs} CSVs, {vtus} .vtu), and history.csv without its wall-clock column"
+        ),
+        "determinism",
+    );
+}
+
+#[test]
+fn one_and_two_threads_give_identical_files_on_the_shipped_fig2() {
+    let (csvs, vtus) = one_and_two_threads("fig2.json", "vm272_L5.msh", 5, 10);
+    validation_row(
+        "321-determinism-l5",
+        "`cases/fig2.json` (L5, 182 518 DOFs) with `--threads 1` and `--threads 2`",
+        "—",
+        &format!(
+            "byte-identical contact CSV and VTU files ({csvs} CSVs, {vtus} .vtu), and history.csv without its wall-clock column"
         ),
         "determinism",
     );

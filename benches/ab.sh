@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# A/B timing of two stickslip binaries (or one binary under two environments) on one case, in
+# alternating runs so that the machine's drift falls on both alike; prints the median and the
+# minimum process wall time of each and the median of the per-pair ratios B/A.
+#
+#   benches/ab.sh N BIN_A BIN_B [CASE] [cold|warm] [ENV_A] [ENV_B]
+#
+# cold: every run with --no-cache (the whole build of the model); warm: each binary has its own
+# fresh cache directory, filled by one untimed run, and the N timed runs are hits.
+# ENV_A / ENV_B: space-separated VAR=value assignments for each side (e.g. the ordering:
+# `STICKSLIP_ORDERING=amd` against `STICKSLIP_ORDERING=nd` with the same binary).
+#
+# Example (what one commit bought; build the older one into another target directory):
+#   git worktree add /tmp/old <commit> && (cd /tmp/old && cargo build --release)
+#   benches/ab.sh 12 /tmp/old/target/release/stickslip target/release/stickslip cases/fig2.json warm
+set -euo pipefail
+N=$1 A=$2 B=$3 CASE=${4:-cases/fig2.json} MODE=${5:-cold} EA=${6:-} EB=${7:-}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+args() { # side
+  if [ "$MODE" = warm ]; then echo "--cache $work/cache_$1"; else echo "--no-cache"; fi
+}
+run() { # side bin env
+  local t0 t1
+  t0=$(date +%s%N)
+  env $3 "$2" run "$CASE" --out "$work/out_$1" --quiet --threads "${STICKSLIP_THREADS:-2}" $(args "$1") >/dev/null
+  t1=$(date +%s%N)
+  echo "$(( (t1 - t0) / 1000 ))e-6"
+}
+if [ "$MODE" = warm ]; then run A "$A" "$EA" >/dev/null; run B "$B" "$EB" >/dev/null; fi
+for _ in $(seq "$N"); do
+  echo "$(run A "$A" "$EA") $(run B "$B" "$EB")"
+done | python3 -c '
+import statistics as st, sys
+r = [tuple(map(float, l.split())) for l in sys.stdin]
+a = [x for x, _ in r]; b = [y for _, y in r]
+print("A: median %.3f s, min %.3f s | B: median %.3f s, min %.3f s | B/A: median of %d pairs %.3f"
+      % (st.median(a), min(a), st.median(b), min(b), len(r), st.median([y / x for x, y in r])))'
