@@ -7,7 +7,8 @@
 //! grounded DOFs and their springs, the forces of the prescribed displacements, and for a
 //! contact model the Delassus operator `W` and the condensed loads `w0` (of the tractions, with
 //! the traction forces they belong to, and of the prescribed displacements); last, the values
-//! of the numeric factor, read in a second thread while the analysis is redone.
+//! of the numeric factor, mapped from the file and checked against its hash in a second thread while
+//! the analysis is redone ([`cache::Reader::map_next`]).
 
 use crate::assembly::UpperCsc;
 use crate::cache::{self, Entry, Key, Open, Report, Status, Store, Words};
