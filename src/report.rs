@@ -209,8 +209,9 @@ pub fn end_summary(case_path: &Path, s: &Summary, out_dir: &Path, stem: &str) ->
         );
     }
     o += &format!(
-        "  time      read {:.3}, assemble {:.3}, analyse {:.3}, factorise {:.3}, condense {:.3}, solve {:.3}, write {:.3} (waited for {:.3}) s; peak memory {}\n",
+        "  time      read {:.3}, pair {:.3}, assemble {:.3}, analyse {:.3}, factorise {:.3}, condense {:.3}, solve {:.3}, write {:.3} (waited for {:.3}) s; peak memory {}\n",
         t.read,
+        t.pair,
         t.assemble,
         t.analyse,
         t.factorise,

@@ -65,6 +65,7 @@ fn vtu_holds_every_documented_array_with_finite_values() {
     );
     let phases = [
         "read",
+        "pair",
         "assemble",
         "analyse",
         "factorise",

@@ -47,6 +47,8 @@ pub enum ModelError {
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct Timings {
     pub read: f64,
+    /// The contact pair: candidate zone, mortar operator and its coverage checks.
+    pub pair: f64,
     pub assemble: f64,
     /// Symbolic analysis (fill-reducing ordering, elimination tree), done once per pattern.
     pub analyse: f64,
@@ -199,7 +201,9 @@ impl Model {
         }
 
         // Contact: candidate zone and mortar operator, whose nodes are retained.
+        let t = Instant::now();
         let pair = contact_pair(case, &mesh, &orient, gap, &path)?;
+        timings.pair = t.elapsed().as_secs_f64();
         let retained = retained_nodes(pair.as_ref());
         let e_star = pair
             .as_ref()
