@@ -108,9 +108,15 @@ pub fn may_hit_within(xm: &[[f64; 2]; 3], x: [f64; 2], n: [f64; 2], r_max: f64) 
     }
     let size = (xm[0][0] - xm[1][0]).hypot(xm[0][1] - xm[1][1]);
     let tol = 1e-12 * (size + x[0].abs() + x[1].abs());
-    // Round-off of evaluating h on the interval, far below the margin.
-    let slack = 1e-12 * (a.abs() * r_max * r_max + b.abs() * r_max + c.abs());
-    let margin = 1e3 * tol * n[0].hypot(n[1]) + slack;
+    let nn = n[0].hypot(n[1]);
+    // Round-off of the coefficients (before their cancellation) and of evaluating h on the
+    // interval, and of the iteration's residual, which grows with the distance |x_m − x|:
+    // far below the margin.
+    let norm = |u: [f64; 2]| u[0].hypot(u[1]);
+    let slack = 1e-12
+        * nn
+        * (norm(q) * r_max * r_max + norm(d) * r_max + norm([xm[2][0] - x[0], xm[2][1] - x[1]]));
+    let margin = 1e3 * tol * nn + slack;
     let h = |r: f64| (a * r + b) * r + c;
     let (lo, hi) = (h(-r_max), h(r_max));
     // The vertex, when inside the interval (else the ends again).

@@ -178,6 +178,11 @@ impl Model {
         timings: &mut Timings,
         gap: Option<f64>,
     ) -> Result<Model, ModelError> {
+        // faer's dense kernels run sequentially (as `main` sets up) for callers of the library
+        // too: some split their sums by the number of threads, and the contact Newton's results
+        // would depend on it; the factorisations take the threads explicitly
+        // (`linsolve::factor_parallelism`).
+        faer::set_global_parallelism(faer::Par::Seq);
         let path = mesh.source.display().to_string();
         let bodies: Vec<&str> = case.bodies.iter().map(|b| b.group.as_str()).collect();
         let curves = boundary_groups(case);
