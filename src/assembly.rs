@@ -103,9 +103,15 @@ impl UpperCsc {
     /// Position of entry (r, c), r ≤ c, in `values`.
     #[inline]
     pub fn position(&self, r: usize, c: usize) -> usize {
-        let rows = &self.row_idx[self.col_ptr[c]..self.col_ptr[c + 1]];
-        self.col_ptr[c] + rows.binary_search(&r).expect("entry in pattern")
+        position_in(&self.col_ptr, &self.row_idx, r, c)
     }
+}
+
+/// Position of entry (r, c), r ≤ c, in the values of the upper CSC pattern `col_ptr`, `row_idx`.
+#[inline]
+fn position_in(col_ptr: &[usize], row_idx: &[usize], r: usize, c: usize) -> usize {
+    let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+    col_ptr[c] + rows.binary_search(&r).expect("entry in pattern")
 }
 
 /// Fills `k.values` with the stiffness of the given elements and returns the forces on the free
@@ -164,10 +170,7 @@ pub fn assemble_stiffness(
                     for j in 0..12 {
                         match d[j] {
                             Dof::Free(c) if r <= c && (lo..hi).contains(&c) => {
-                                let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
-                                let p =
-                                    col_ptr[c] + rows.binary_search(&r).expect("entry in pattern");
-                                vals[p - base] += ke[i * 12 + j];
+                                vals[position_in(col_ptr, row_idx, r, c) - base] += ke[i * 12 + j];
                             }
                             Dof::Fixed(q) if (lo..hi).contains(&r) => {
                                 fs[r - lo] -= ke[i * 12 + j] * dofs.prescribed[q];

@@ -219,7 +219,7 @@ fn equilibrium(inp: &Input) -> Check {
     // The force a strain of 1e-12 of the stiffest body over the model's size produces: below
     // it a residual is round-off (zero and vanishing loads, a body moved rigidly).
     let e_max = model.elems.iter().map(|(_, m)| m.e).fold(0.0, f64::max);
-    let round_off = ROUND_OFF_STRAIN * e_max * model.mesh.diameter();
+    let round_off = ROUND_OFF_STRAIN * e_max * model.scales().0;
     let scale = [pilot, traction, reaction]
         .iter()
         .map(|v| v[0].hypot(v[1]))
@@ -250,7 +250,7 @@ fn displacement(inp: &Input) -> Check {
             u[0].hypot(u[1])
         })
         .fold(0.0, f64::max);
-    let size = inp.model.mesh.diameter();
+    let size = inp.model.scales().0;
     let value = umax / size;
     let mut c = Check::new(
         "max_displacement",

@@ -35,7 +35,7 @@ fn sym<'a>(
 /// The parallelism of the sparse numeric factorisations and of the product that forms the
 /// Delassus operator: all of rayon's threads. Their results do not depend on the number of
 /// threads (`tests/determinism.rs`), unlike some of faer's dense kernels, which the program
-/// runs sequentially (faer's global parallelism, set in `main`).
+/// runs sequentially (faer's global parallelism, set by `Model::build_on`).
 pub fn factor_parallelism() -> faer::Par {
     match rayon::current_num_threads() {
         0 | 1 => faer::Par::Seq,

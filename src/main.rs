@@ -123,12 +123,7 @@ fn set_threads(n: Option<usize>) -> Result<(), String> {
         .num_threads(n)
         .build_global()
         .map_err(|e| format!("cannot set up {n} threads: {e}"))?;
-    // faer's dense kernels (the contact Newton's block factorisations, solves and products)
-    // stay sequential: run in parallel, some split their sums by the number of threads, and a
-    // run's results then depended on `--threads` (at 1e-10 on Fig. 2 at L5). The sparse
-    // factorisation and the Delassus product take the threads explicitly
-    // (`linsolve::factor_parallelism`); with them the results do not depend on the thread count.
-    faer::set_global_parallelism(faer::Par::Seq);
+    // faer's own parallelism is set where models are built (`Model::build_on`).
     Ok(())
 }
 

@@ -167,3 +167,77 @@ fn block_recovery_and_kept_element_matrices_equal_the_one_by_one_computation() {
         );
     }
 }
+
+/// The writer's batches (`Series::write` with several steps: one block solve for their fields,
+/// datasets encoded in parallel) write the same files, byte for byte, as one step at a time,
+/// and a step's reply channel receives exactly its recovered field.
+#[test]
+fn a_batch_of_steps_writes_what_one_step_at_a_time_writes() {
+    use stickslip::case::Case;
+    use stickslip::model::Model;
+    use stickslip::output::series::{Series, StepOutput};
+    use stickslip::run::{LogLevel, simulate};
+    let case: Case =
+        serde_json::from_value(shipped_case_on("vm272_cm.json", "vm272_L1.msh")).unwrap();
+    let model = Model::build(&case, &repo().join("cases/vm272_cm.json")).unwrap();
+    let law = model.friction.clone();
+    let mut steps = Vec::new();
+    simulate(&model, &case, law.as_ref(), LogLevel::Error, &mut |ev| {
+        steps.push((ev.step, ev.time, ev.scale, ev.contact.cloned().unwrap()));
+        Ok(())
+    })
+    .unwrap();
+    assert!(steps.len() >= 3, "{} steps", steps.len());
+    let picked: Vec<_> = [1, steps.len() / 2, steps.len() - 1]
+        .iter()
+        .map(|&k| steps[k].clone())
+        .collect();
+    let out = |s: &(usize, f64, f64, stickslip::contact::solver::State),
+               reply: Option<std::sync::mpsc::SyncSender<Vec<f64>>>| StepOutput {
+        step: s.0,
+        time: s.1,
+        scale: s.2,
+        u: None,
+        contact: Some(s.3.clone()),
+        state: None,
+        reply,
+    };
+    let dir = tempdir("writer-batches");
+    let (one, batched) = (dir.join("one"), dir.join("batched"));
+    for d in [&one, &batched] {
+        std::fs::create_dir_all(d).unwrap();
+    }
+    let mut series = Series::new(&model, &one, "cm", false);
+    for s in &picked {
+        series.write(vec![out(s, None)]).unwrap();
+    }
+    let (tx, rx) = std::sync::mpsc::sync_channel(1);
+    let mut series = Series::new(&model, &batched, "cm", false);
+    series
+        .write(vec![out(&picked[0], None), out(&picked[1], Some(tx))])
+        .unwrap();
+    series.write(vec![out(&picked[2], None)]).unwrap();
+    let replied = rx.recv().expect("the batch sends the field back");
+    let own = model.contact_displacement(picked[1].2, &picked[1].3);
+    assert!(
+        replied.len() == own.len()
+            && replied
+                .iter()
+                .zip(&own)
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+        "the reply is not the step's field"
+    );
+    let mut names: Vec<String> = std::fs::read_dir(&one)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .collect();
+    names.sort();
+    assert_eq!(names.len(), 3 * 3 + 1, "{names:?}");
+    for name in &names {
+        assert!(
+            std::fs::read(one.join(name)).unwrap() == std::fs::read(batched.join(name)).unwrap(),
+            "{name} differs between one-step and batched writes"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -96,26 +96,20 @@ pub fn default_candidate_gap(mesh: &Mesh, slave: &[[usize; 3]]) -> f64 {
     0.005 * (hi[0] - lo[0]).hypot(hi[1] - lo[1])
 }
 
-/// The master face indexed for [`point_gap`]: its edges' coordinates, a grid of the boxes of
-/// their Bézier control points, and the largest side of those boxes.
+/// The master face indexed for [`point_gap`]: its edges' coordinates and a grid of the boxes
+/// of their Bézier control points.
 struct MasterIndex {
     coords: Vec<[[f64; 2]; 3]>,
     grid: EdgeGrid,
-    max_side: f64,
 }
 
 impl MasterIndex {
     fn new(mesh: &Mesh, master: &[[usize; 3]]) -> MasterIndex {
         let coords: Vec<[[f64; 2]; 3]> = master.iter().map(|e| e.map(|k| mesh.nodes[k])).collect();
         let boxes: Vec<Aabb> = coords.iter().map(control_box).collect();
-        let max_side = boxes
-            .iter()
-            .map(|(lo, hi)| (hi[0] - lo[0]).max(hi[1] - lo[1]))
-            .fold(0.0, f64::max);
         MasterIndex {
             grid: EdgeGrid::new(&boxes),
             coords,
-            max_side,
         }
     }
 }
@@ -136,8 +130,8 @@ fn point_gap(
     near: &mut Vec<usize>,
 ) -> Option<f64> {
     // Every edge that passes `within_reach` has its box within this distance of `x`.
-    let r =
-        (reach + 1e-6 * (reach + x[0].abs() + x[1].abs() + 2.0 * master.max_side)) * (1.0 + 1e-9);
+    let r = (reach + 1e-6 * (reach + x[0].abs() + x[1].abs() + 2.0 * master.grid.max_side()))
+        * (1.0 + 1e-9);
     master
         .grid
         .query(&([x[0] - r, x[1] - r], [x[0] + r, x[1] + r]), near);

@@ -215,10 +215,6 @@ pub fn build(
     let mboxes: Vec<([f64; 2], [f64; 2])> =
         master.iter().map(|e| bounding_box(&coords(e))).collect();
     let grid = super::search::EdgeGrid::new(&mboxes);
-    let max_side = mboxes
-        .iter()
-        .map(|(lo, hi)| (hi[0] - lo[0]).max(hi[1] - lo[1]))
-        .fold(0.0, f64::max);
     let mut near = Vec::new();
     let mut coverage = Vec::with_capacity(slave.len());
     for se in slave {
@@ -235,7 +231,7 @@ pub fn build(
         let mut segments: Vec<(f64, f64, usize)> = Vec::new();
         // Every master edge the test below keeps has its box within this distance of the
         // slave edge's box; the grid gives them in increasing order, as a scan would.
-        let r = (2.0 * max_gap.abs() + 10.0 * chord + max_side) * (1.0 + 1e-9);
+        let r = (2.0 * max_gap.abs() + 10.0 * chord + grid.max_side()) * (1.0 + 1e-9);
         grid.query(&([lo[0] - r, lo[1] - r], [hi[0] + r, hi[1] + r]), &mut near);
         for &mi in &near {
             let me = &master[mi];

@@ -20,6 +20,8 @@ pub struct EdgeGrid {
     items: Vec<u32>,
     /// Number of edges.
     len: usize,
+    /// The largest side of any box.
+    max_side: f64,
 }
 
 impl EdgeGrid {
@@ -28,6 +30,10 @@ impl EdgeGrid {
     /// stays linear in the number of edges.
     pub fn new(boxes: &[Aabb]) -> EdgeGrid {
         let n = boxes.len();
+        let max_side = boxes
+            .iter()
+            .map(|(lo, hi)| (hi[0] - lo[0]).max(hi[1] - lo[1]))
+            .fold(0.0, f64::max);
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         let mut mean = 0.0;
         for (a, b) in boxes {
@@ -49,6 +55,7 @@ impl EdgeGrid {
                 start: vec![0, n],
                 items: (0..n as u32).collect(),
                 len: n,
+                max_side,
             };
         }
         mean /= n as f64;
@@ -69,6 +76,7 @@ impl EdgeGrid {
             start: vec![0; nx * ny + 1],
             items: Vec::new(),
             len: n,
+            max_side,
         };
         // Two passes: count the edges of each cell, then fill (in increasing edge order).
         let mut counts = vec![0usize; nx * ny];
@@ -99,6 +107,12 @@ impl EdgeGrid {
             }
         }
         grid
+    }
+
+    /// The largest side of the boxes the grid was built on (callers widen their queries by it
+    /// when their own test allows for the size of each edge).
+    pub fn max_side(&self) -> f64 {
+        self.max_side
     }
 
     /// The cell index range along one axis covering [a, b] (clamped to the grid).

@@ -178,10 +178,12 @@ impl Model {
         timings: &mut Timings,
         gap: Option<f64>,
     ) -> Result<Model, ModelError> {
-        // faer's dense kernels run sequentially (as `main` sets up) for callers of the library
-        // too: some split their sums by the number of threads, and the contact Newton's results
-        // would depend on it; the factorisations take the threads explicitly
-        // (`linsolve::factor_parallelism`).
+        // faer's dense kernels (the contact Newton's block factorisations, solves and products)
+        // run sequentially: in parallel, some split their sums by the number of threads, and a
+        // run's results then depended on `--threads` (at 1e-10 on Fig. 2 at L5). The sparse
+        // factorisation and the Delassus product take the threads explicitly
+        // (`linsolve::factor_parallelism`); with them the results do not depend on the thread
+        // count (`tests/determinism.rs`).
         faer::set_global_parallelism(faer::Par::Seq);
         let path = mesh.source.display().to_string();
         let bodies: Vec<&str> = case.bodies.iter().map(|b| b.group.as_str()).collect();

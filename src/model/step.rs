@@ -164,6 +164,9 @@ impl Model {
     /// [`Model::contact_displacement`] of several states in one block solve, which reads the
     /// factor once for all of them (bit for bit the same fields).
     pub fn contact_displacements(&self, states: &[(f64, &State)]) -> Vec<Vec<f64>> {
+        if states.is_empty() {
+            return Vec::new();
+        }
         let cm = self.contact.as_ref().expect("contact model");
         let cases: Vec<_> = states
             .iter()

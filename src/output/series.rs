@@ -106,12 +106,7 @@ impl<'a> Series<'a> {
                 )
             })
             .collect();
-        let recovered = if states.is_empty() {
-            Vec::new()
-        } else {
-            model.contact_displacements(&states)
-        };
-        let mut recovered = recovered.into_iter();
+        let mut recovered = model.contact_displacements(&states).into_iter();
         let fields: Vec<std::borrow::Cow<[f64]>> = steps
             .iter()
             .map(|s| match &s.u {
