@@ -109,21 +109,7 @@ fn partial_factorisation_gives_the_schur_complement() {
 /// operations in the same order.
 #[test]
 fn block_recovery_and_kept_element_matrices_equal_the_one_by_one_computation() {
-    use stickslip::case::Case;
-    use stickslip::model::Model;
-    use stickslip::run::{LogLevel, simulate};
-    let case: Case =
-        serde_json::from_value(shipped_case_on("vm272_cm.json", "vm272_L1.msh")).unwrap();
-    let model = Model::build(&case, &repo().join("cases/vm272_cm.json")).unwrap();
-    let law = model.friction.clone();
-    let sim = simulate(
-        &model,
-        &case,
-        law.as_ref(),
-        LogLevel::Error,
-        &mut |_| Ok(()),
-    )
-    .unwrap();
+    let (model, sim) = cm_on_l1(&mut |_| Ok(()));
     assert!(sim.failure.is_none(), "{:?}", sim.failure);
     let st = sim.last_state.as_ref().expect("a converged step");
     // Three different right-hand sides: the last state at two load scales, and with its normal
@@ -168,25 +154,39 @@ fn block_recovery_and_kept_element_matrices_equal_the_one_by_one_computation() {
     }
 }
 
+/// The shipped Cattaneo–Mindlin case on `vm272_L1`: its model and its simulation (`on_step`
+/// sees every step).
+fn cm_on_l1(
+    on_step: &mut dyn FnMut(
+        &stickslip::driver::StepEvent,
+    ) -> Result<(), stickslip::error::RunError>,
+) -> (stickslip::model::Model, stickslip::driver::Simulation) {
+    let case: stickslip::case::Case =
+        serde_json::from_value(shipped_case_on("vm272_cm.json", "vm272_L1.msh")).unwrap();
+    let model = stickslip::model::Model::build(&case, &repo().join("cases/vm272_cm.json")).unwrap();
+    let law = model.friction.clone();
+    let sim = stickslip::run::simulate(
+        &model,
+        &case,
+        law.as_ref(),
+        stickslip::run::LogLevel::Error,
+        on_step,
+    )
+    .unwrap();
+    (model, sim)
+}
+
 /// The writer's batches (`Series::write` with several steps: one block solve for their fields,
 /// datasets encoded in parallel) write the same files, byte for byte, as one step at a time,
 /// and a step's reply channel receives exactly its recovered field.
 #[test]
 fn a_batch_of_steps_writes_what_one_step_at_a_time_writes() {
-    use stickslip::case::Case;
-    use stickslip::model::Model;
     use stickslip::output::series::{Series, StepOutput};
-    use stickslip::run::{LogLevel, simulate};
-    let case: Case =
-        serde_json::from_value(shipped_case_on("vm272_cm.json", "vm272_L1.msh")).unwrap();
-    let model = Model::build(&case, &repo().join("cases/vm272_cm.json")).unwrap();
-    let law = model.friction.clone();
     let mut steps = Vec::new();
-    simulate(&model, &case, law.as_ref(), LogLevel::Error, &mut |ev| {
+    let (model, _) = cm_on_l1(&mut |ev| {
         steps.push((ev.step, ev.time, ev.scale, ev.contact.cloned().unwrap()));
         Ok(())
-    })
-    .unwrap();
+    });
     assert!(steps.len() >= 3, "{} steps", steps.len());
     let picked: Vec<_> = [1, steps.len() / 2, steps.len() - 1]
         .iter()
