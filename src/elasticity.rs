@@ -176,6 +176,45 @@ fn mixed_element_stiffness(xe: &[[f64; 2]; 6], mat: &Material) -> [f64; 144] {
     k
 }
 
+/// The internal nodal forces `K_e u_e` of an element with displacements `ue`, integrated like
+/// [`element_stiffness`] (the same rule) without forming `K_e`: `Σ_q w_q det J_q B_qᵀ σ_q`, plus
+/// `λ A b̄ (b̄ · u_e)` for a mixed element. Also the largest entry of `K_e` in magnitude, which is
+/// its largest diagonal entry (`K_e` is positive semi-definite, `|K_ij| ≤ √(K_ii K_jj)`).
+pub fn element_forces(xe: &[[f64; 2]; 6], ue: &[f64; 12], mat: &Material) -> ([f64; 12], f64) {
+    let (l, m) = mat.lame();
+    let mixed = mat.is_mixed();
+    let mut f = [0.0; 12];
+    let mut diag = [0.0; 12];
+    for (p, w) in TRI_6.iter() {
+        let mp = tri6::map_point(xe, p[0], p[1]);
+        let s = w * mp.det_j;
+        let e = strain(&mp, ue);
+        // The stress of the B part: σ = D ε, or μ D₀ ε for a mixed element (its λ part below).
+        let sig = if mixed {
+            [2.0 * m * e[0], 2.0 * m * e[1], m * e[2]]
+        } else {
+            mat.stress(e)
+        };
+        let (a_xx, a_yy) = if mixed { (2.0 * m, m) } else { (l + 2.0 * m, m) };
+        for (a, g) in mp.dndx.iter().enumerate() {
+            let (ax, ay) = (g[0], g[1]);
+            f[2 * a] += s * (ax * sig[0] + ay * sig[2]);
+            f[2 * a + 1] += s * (ay * sig[1] + ax * sig[2]);
+            diag[2 * a] += s * (a_xx * ax * ax + a_yy * ay * ay);
+            diag[2 * a + 1] += s * (a_xx * ay * ay + a_yy * ax * ax);
+        }
+    }
+    if mixed {
+        let (bbar, area) = mean_divergence(xe);
+        let theta: f64 = bbar.iter().zip(ue).map(|(b, u)| b * u).sum();
+        for i in 0..12 {
+            f[i] += l * area * bbar[i] * theta;
+            diag[i] += l * area * bbar[i] * bbar[i];
+        }
+    }
+    (f, diag.iter().fold(0.0f64, |a, d| a.max(d.abs())))
+}
+
 /// Consistent nodal forces of a body force `b(x)` per unit volume (12 entries).
 pub fn element_body_force(xe: &[[f64; 2]; 6], b: &dyn Fn([f64; 2]) -> [f64; 2]) -> [f64; 12] {
     let mut f = [0.0; 12];
@@ -206,13 +245,11 @@ pub fn strain(mp: &MapPoint, ue: &[f64; 12]) -> [f64; 3] {
 /// degree-2 quadrature points (ξ, η ∈ {1/6, 2/3}) by the linear field through them.
 pub fn nodal_stress(xe: &[[f64; 2]; 6], ue: &[f64; 12], mat: &Material) -> [[f64; 4]; 6] {
     let theta = element_theta(xe, ue, mat);
-    let g: Vec<[f64; 4]> = TRI_3
-        .iter()
-        .map(|(p, _)| {
-            let mp = tri6::map_point(xe, p[0], p[1]);
-            mat.stress4(strain(&mp, ue), theta)
-        })
-        .collect();
+    let g: [[f64; 4]; 3] = std::array::from_fn(|q| {
+        let p = TRI_3[q].0;
+        let mp = tri6::map_point(xe, p[0], p[1]);
+        mat.stress4(strain(&mp, ue), theta)
+    });
     let mut out = [[0.0; 4]; 6];
     for (a, r) in tri6::NODE_REF_COORDS.iter().enumerate() {
         // Local coordinates in the triangle of the quadrature points.
@@ -276,6 +313,23 @@ mod tests {
             for i in 0..12 {
                 let f: f64 = (0..12).map(|j| k[i * 12 + j] * u[j]).sum();
                 assert!(f.abs() < 1e-11 * scale, "{f}");
+            }
+        }
+    }
+
+    #[test]
+    fn element_forces_are_k_times_u_and_kmax_the_largest_entry() {
+        let xe = curved_element();
+        let ue: [f64; 12] = std::array::from_fn(|i| ((i * 37 % 11) as f64 - 5.0) * 1e-3);
+        for mat in [Material { e: 3.0, nu: 0.25 }, Material { e: 2.0, nu: 0.4995 }] {
+            let k = element_stiffness(&xe, &mat);
+            let (f, kmax) = element_forces(&xe, &ue, &mat);
+            let kmax_k = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            assert!((kmax - kmax_k).abs() <= 1e-14 * kmax_k, "{kmax} against {kmax_k}");
+            for i in 0..12 {
+                let ku: f64 = (0..12).map(|j| k[i * 12 + j] * ue[j]).sum();
+                let size: f64 = (0..12).map(|j| (k[i * 12 + j] * ue[j]).abs()).sum();
+                assert!((f[i] - ku).abs() <= 1e-13 * size, "row {i}: {} against {ku}", f[i]);
             }
         }
     }

@@ -31,3 +31,4 @@ pub mod restart;
 pub mod run;
 pub mod shapes;
 pub mod sweep;
+pub mod trace;

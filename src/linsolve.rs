@@ -639,6 +639,84 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
+/// The forward, diagonal and backward sweeps of `K̂ X = B` with the leading block of a saddle
+/// factor (`nodes`: per supernode of K its first column, its columns of K, the pattern rows of
+/// K and its values), in place on the permuted columns `x` of length `size` each.
+fn sweep_leading(
+    nodes: &[(usize, usize, usize, faer::sparse::linalg::cholesky::supernodal::SupernodeRef<'_, usize, f64>)],
+    x: &mut [f64],
+    size: usize,
+) {
+    // Each supernode is read once for all the columns (the factor is tens to hundreds of MB
+    // and the sweeps are memory-bound); each column sees the same operations in the same
+    // order as when it is solved alone.
+    let mut t = Vec::new();
+    // Forward: L_KK y = b; the off-diagonal rows of a supernode are gathered into `t` and
+    // scattered once.
+    for (start, wk, kp, node) in nodes {
+        let (v, pat, w) = (node.val(), &node.pattern()[..*kp], node.val().ncols());
+        for x in x.chunks_exact_mut(size) {
+            // A supernode whose entries are all zero changes nothing (the right-hand sides of
+            // recoveries are zero outside the retained DOFs, and so stay most supernodes).
+            if x[*start..start + wk].iter().all(|&v| v == 0.0) {
+                continue;
+            }
+            t.clear();
+            t.resize(*kp, 0.0);
+            for c in 0..*wk {
+                let xc = x[start + c];
+                if xc == 0.0 {
+                    continue;
+                }
+                let col = v
+                    .col(c)
+                    .try_as_col_major()
+                    .expect("column-major")
+                    .as_slice();
+                for r in c + 1..*wk {
+                    x[start + r] -= col[r] * xc;
+                }
+                for (tk, lk) in t.iter_mut().zip(&col[w..w + kp]) {
+                    *tk += lk * xc;
+                }
+            }
+            for (&row, tk) in pat.iter().zip(&t) {
+                x[row] -= tk;
+            }
+        }
+    }
+    // D.
+    for (start, wk, _, node) in nodes {
+        let v = node.val();
+        for x in x.chunks_exact_mut(size) {
+            for c in 0..*wk {
+                x[start + c] /= v[(c, c)];
+            }
+        }
+    }
+    // Backward: L_KKᵀ x = y; the pattern's values gathered into `t` once.
+    for (start, wk, kp, node) in nodes.iter().rev() {
+        let (v, pat, w) = (node.val(), &node.pattern()[..*kp], node.val().ncols());
+        for x in x.chunks_exact_mut(size) {
+            t.clear();
+            t.extend(pat.iter().map(|&row| x[row]));
+            for c in (0..*wk).rev() {
+                let col = v
+                    .col(c)
+                    .try_as_col_major()
+                    .expect("column-major")
+                    .as_slice();
+                // Both sums as (vectorised) dot products: the one over the diagonal block
+                // was a chain of dependent scalar updates, most of the sweep's time.
+                let mut acc = x[start + c];
+                acc -= dot(&col[c + 1..*wk], &x[start + c + 1..start + wk]);
+                acc -= dot(&col[w..w + kp], &t);
+                x[start + c] = acc;
+            }
+        }
+    }
+}
+
 impl SaddleFactor {
     /// The values of the factor (shared, not copied).
     pub fn values(&self) -> SharedValues {
@@ -686,68 +764,17 @@ impl SaddleFactor {
                 )
             })
             .collect();
-        // Each supernode is read once for all the columns (the factor is tens to hundreds of MB
-        // and the sweeps are memory-bound); each column sees the same operations in the same
-        // order as when it is solved alone.
-        let mut t = Vec::new();
-        // Forward: L_KK y = b; the off-diagonal rows of a supernode are gathered into `t` and
-        // scattered once.
-        for (start, wk, kp, node) in &nodes {
-            let (v, pat, w) = (node.val(), &node.pattern()[..*kp], node.val().ncols());
-            for x in x.chunks_exact_mut(size) {
-                t.clear();
-                t.resize(*kp, 0.0);
-                for c in 0..*wk {
-                    let xc = x[start + c];
-                    if xc == 0.0 {
-                        continue;
-                    }
-                    let col = v
-                        .col(c)
-                        .try_as_col_major()
-                        .expect("column-major")
-                        .as_slice();
-                    for r in c + 1..*wk {
-                        x[start + r] -= col[r] * xc;
-                    }
-                    for (tk, lk) in t.iter_mut().zip(&col[w..w + kp]) {
-                        *tk += lk * xc;
-                    }
-                }
-                for (&row, tk) in pat.iter().zip(&t) {
-                    x[row] -= tk;
-                }
-            }
-        }
-        // D.
-        for (start, wk, _, node) in &nodes {
-            let v = node.val();
-            for x in x.chunks_exact_mut(size) {
-                for c in 0..*wk {
-                    x[start + c] /= v[(c, c)];
-                }
-            }
-        }
-        // Backward: L_KKᵀ x = y; the pattern's values gathered into `t` once.
-        for (start, wk, kp, node) in nodes.iter().rev() {
-            let (v, pat, w) = (node.val(), &node.pattern()[..*kp], node.val().ncols());
-            for x in x.chunks_exact_mut(size) {
-                t.clear();
-                t.extend(pat.iter().map(|&row| x[row]));
-                for c in (0..*wk).rev() {
-                    let col = v
-                        .col(c)
-                        .try_as_col_major()
-                        .expect("column-major")
-                        .as_slice();
-                    let mut acc = x[start + c];
-                    for r in c + 1..*wk {
-                        acc -= col[r] * x[start + r];
-                    }
-                    acc -= dot(&col[w..w + kp], &t);
-                    x[start + c] = acc;
-                }
-            }
+        // Each column sees the same operations in the same order whether it is solved alone
+        // or with others, on any thread: the columns are split over the threads (each group
+        // reads the factor once; the sweeps are memory-bound).
+        let threads = rayon::current_num_threads().clamp(1, ncols.max(1));
+        let per = ncols.div_ceil(threads).max(1);
+        if threads > 1 {
+            use rayon::prelude::*;
+            x.par_chunks_mut(size * per)
+                .for_each(|cols| sweep_leading(&nodes, cols, size));
+        } else {
+            sweep_leading(&nodes, &mut x, size);
         }
         for j in 0..ncols {
             for i in 0..n {

@@ -128,6 +128,7 @@ fn set_threads(n: Option<usize>) -> Result<(), String> {
 }
 
 fn main() -> ExitCode {
+    stickslip::trace::start();
     let cli = Cli::parse();
     match cli.cmd {
         Cmd::Run {
@@ -151,7 +152,9 @@ fn main() -> ExitCode {
                 resume,
                 cache: cache_choice(cache, no_cache),
             };
-            match stickslip::run::run(&case, &opts) {
+            let ran = stickslip::run::run(&case, &opts);
+            stickslip::trace::mark("run returned");
+            match ran {
                 Ok(_) => ExitCode::SUCCESS,
                 Err(e) => {
                     // Exit 5 (equilibrium lost past Q_max) is the answer of a force-controlled

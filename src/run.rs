@@ -46,6 +46,7 @@ impl RunOptions {
 /// starts again.
 pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
     let case = Case::load(case_path)?;
+    crate::trace::mark("case loaded");
     let out_dir = opts
         .out
         .clone()
@@ -218,6 +219,7 @@ pub fn run_model(
                 Ok(())
             }
         };
+        crate::trace::mark("simulate");
         let sim = simulate_with(&model, case, law.as_ref(), level, &mut on_step, restart);
         let sim = match sim {
             Ok(sim) => sim,
@@ -239,10 +241,13 @@ pub fn run_model(
             // None when the writer stopped on an error first (reported by `finish` below).
             sim.last_u = rx.recv().ok();
         }
+        crate::trace::mark("simulated");
         let solve_s = sim.solve_s;
         let history = history_csv(&sim.records);
         let summarised = summarise(&model, case, case_path, out_dir, sim);
+        crate::trace::mark("summarised");
         let (t_write, t_wait) = writer.finish()?;
+        crate::trace::mark("writer done");
         Ok((summarised, history, solve_s, t_write, t_wait))
     })?;
     progress.finish();
@@ -262,6 +267,7 @@ pub fn run_model(
             .expect("serialisable")
             .as_bytes(),
     )?;
+    crate::trace::mark("summary written");
     print_warnings(&summary, level >= LogLevel::Warn);
     if level >= LogLevel::Info {
         eprint!("{}", end_summary(case_path, &summary, out_dir, &stem));
@@ -312,6 +318,7 @@ impl<'a> Progress<'a> {
     }
 
     fn step(&self, ev: &StepEvent) {
+        crate::trace::mark(&format!("step {}", ev.step));
         let r = ev.record;
         let msg = match (r.pilot, r.contact) {
             (Some(p), Some(c)) => format!(

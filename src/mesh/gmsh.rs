@@ -178,7 +178,36 @@ fn check_header(bytes: &[u8], p: &str) -> Result<(), MeshReadError> {
 struct NodeTable {
     nodes: Vec<[f64; 2]>,
     node_tags: Vec<u64>,
-    index_of: HashMap<u64, usize>,
+    index_of: TagIndex,
+}
+
+/// Node tag → node index: a table when the tags are dense (gmsh numbers nodes 1..N), else a
+/// hash map.
+enum TagIndex {
+    Dense(Vec<usize>),
+    Sparse(HashMap<u64, usize>),
+}
+
+impl TagIndex {
+    fn new(tags: &[u64]) -> TagIndex {
+        let max = tags.iter().copied().max().unwrap_or(0);
+        if max <= 2 * tags.len() as u64 + 1024 {
+            let mut v = vec![usize::MAX; max as usize + 1];
+            for (i, &t) in tags.iter().enumerate() {
+                v[t as usize] = i;
+            }
+            TagIndex::Dense(v)
+        } else {
+            TagIndex::Sparse(tags.iter().enumerate().map(|(i, &t)| (t, i)).collect())
+        }
+    }
+
+    fn get(&self, tag: u64) -> Option<usize> {
+        match self {
+            TagIndex::Dense(v) => v.get(tag as usize).copied().filter(|&i| i != usize::MAX),
+            TagIndex::Sparse(m) => m.get(&tag).copied(),
+        }
+    }
 }
 
 /// Reads the `$Nodes` section (x, y and tag of every node); an empty section is an error.
@@ -199,7 +228,6 @@ fn read_nodes(
             })?;
     let mut nodes = Vec::new();
     let mut node_tags = Vec::new();
-    let mut index_of: HashMap<u64, usize> = HashMap::new();
     for block in &node_sec.node_blocks {
         // mshio keeps the tags only when the whole section's tags are sparse; otherwise they
         // come from our own pass over the section (`file_tags`), in file order.
@@ -223,7 +251,6 @@ fn read_nodes(
             }
         };
         for (node, tag) in block.nodes.iter().zip(tags) {
-            index_of.insert(tag, nodes.len());
             nodes.push([node.x, node.y]);
             node_tags.push(tag);
         }
@@ -235,9 +262,9 @@ fn read_nodes(
         });
     }
     Ok(NodeTable {
+        index_of: TagIndex::new(&node_tags),
         nodes,
         node_tags,
-        index_of,
     })
 }
 
@@ -298,21 +325,21 @@ fn check_block_type(block: &mshio::ElementBlock<u64, i32>, p: &str) -> Result<()
 fn push_block_elements(
     mesh: &mut Mesh,
     block: &mshio::ElementBlock<u64, i32>,
-    index_of: &HashMap<u64, usize>,
+    index_of: &TagIndex,
     p: &str,
 ) -> Result<Vec<usize>, MeshReadError> {
     let kind = block.element_type as u8;
     let mut local = Vec::with_capacity(block.elements.len());
     for el in &block.elements {
         let idx = |t: u64| {
-            index_of.get(&t).copied().ok_or(MeshReadError::MissingNode {
+            index_of.get(t).ok_or_else(|| MeshReadError::MissingNode {
                 path: p.into(),
                 tag: el.element_tag,
                 node: t,
             })
         };
         // The element's nodes as mesh indices, checking the count.
-        let resolve = |want: usize| -> Result<Vec<usize>, MeshReadError> {
+        let resolve = |want: usize| -> Result<[usize; 6], MeshReadError> {
             if el.nodes.len() != want {
                 return Err(MeshReadError::Parse {
                     path: p.into(),
@@ -323,7 +350,11 @@ fn push_block_elements(
                     ),
                 });
             }
-            el.nodes.iter().map(|&t| idx(t)).collect()
+            let mut n = [0usize; 6];
+            for (k, &t) in el.nodes.iter().enumerate() {
+                n[k] = idx(t)?;
+            }
+            Ok(n)
         };
         if kind == 9 {
             let n = resolve(6)?;

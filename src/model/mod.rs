@@ -104,10 +104,6 @@ pub struct Model {
     /// the write when the model is dropped.
     #[allow(dead_code)]
     cache_job: Option<crate::cache::Job>,
-    /// The element stiffness matrices, in the order of `elems`, once
-    /// [`Model::keep_element_stiffness`] has been called (a sweep does, so that the
-    /// self-checks of each of its rows do not integrate them again).
-    element_k: std::sync::OnceLock<Vec<[f64; 144]>>,
     /// The mesh's diameter and the largest Young's modulus of the bodies in use (see
     /// [`Model::scales`]).
     scales: std::sync::OnceLock<(f64, f64)>,
@@ -147,6 +143,7 @@ impl Model {
             })
         })?;
         let mesh = crate::mesh::gmsh::parse(&bytes, &path)?;
+        crate::trace::mark("mesh read");
         let mut timings = Timings {
             read: t0.elapsed().as_secs_f64(),
             ..Default::default()
@@ -189,6 +186,7 @@ impl Model {
         let bodies: Vec<&str> = case.bodies.iter().map(|b| b.group.as_str()).collect();
         let curves = boundary_groups(case);
         check::check(&mesh, &bodies, &curves)?;
+        crate::trace::mark("mesh checked");
 
         let (elems, elem_body) = body_elements(case, &mesh);
         let active = active_nodes(&mesh, &elems);
@@ -208,9 +206,11 @@ impl Model {
         }
 
         // Contact: candidate zone and mortar operator, whose nodes are retained.
+        crate::trace::mark("orientation");
         let t = Instant::now();
         let pair = contact_pair(case, &mesh, &orient, gap, &path)?;
         timings.pair = t.elapsed().as_secs_f64();
+        crate::trace::mark("contact pair");
         let retained = retained_nodes(pair.as_ref());
         let e_star = pair
             .as_ref()
@@ -239,6 +239,7 @@ impl Model {
         let y = pair
             .as_ref()
             .map(|p| crate::contact::ConstraintRows::new(p, &dofs, &grounded));
+        crate::trace::mark("pair, dofs");
         let t = Instant::now();
         let f_traction = traction_forces(case, &mesh, &orient, &dofs);
         let t_traction = t.elapsed().as_secs_f64();
@@ -314,6 +315,7 @@ impl Model {
                     (condensed, contact, f_prescribed, nnz, None, pending)
                 }
             };
+        crate::trace::mark("factorised");
         let contact = contact.map(|mut c| {
             c.system.floating_pilot = pilot_separation.is_some();
             c
@@ -385,7 +387,6 @@ impl Model {
             timings: timings.clone(),
             cache: cache_report,
             cache_job,
-            element_k: std::sync::OnceLock::new(),
             scales: std::sync::OnceLock::new(),
         })
     }

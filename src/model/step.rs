@@ -56,45 +56,18 @@ pub struct ElementForces {
 }
 
 impl Model {
-    /// Integrates the element stiffness matrices once and keeps them for
-    /// [`Model::element_forces`] (1.15 kB per element: 52 MB on L5), for callers that check
-    /// many solutions of one model.
-    pub fn keep_element_stiffness(&self) {
-        use rayon::prelude::*;
-        self.element_k.get_or_init(|| {
-            self.elems
-                .par_iter()
-                .map(|(e, mat)| {
-                    crate::elasticity::element_stiffness(&self.mesh.tri_coords(*e), mat)
-                })
-                .collect()
-        });
-    }
-
     /// The nodal displacements and internal forces of every element for the free solution `u`
     /// (prescribed values included), in the order of `self.elems`.
     pub fn element_forces(&self, u: &[f64]) -> Vec<ElementForces> {
         use rayon::prelude::*;
-        let kept = self.element_k.get();
         self.elems
             .par_iter()
-            .enumerate()
-            .map(|(i, (e, mat))| {
+            .map(|(e, mat)| {
                 let nodes = &self.mesh.triangles[*e].nodes;
                 let ue: [f64; 12] =
                     std::array::from_fn(|i| self.dofs.displacement(nodes[i / 2], u)[i % 2]);
-                let integrated;
-                let k = match kept {
-                    Some(k) => &k[i],
-                    None => {
-                        integrated =
-                            crate::elasticity::element_stiffness(&self.mesh.tri_coords(*e), mat);
-                        &integrated
-                    }
-                };
-                let fe: [f64; 12] =
-                    std::array::from_fn(|i| (0..12).map(|j| k[i * 12 + j] * ue[j]).sum());
-                let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let (fe, kmax) =
+                    crate::elasticity::element_forces(&self.mesh.tri_coords(*e), &ue, mat);
                 ElementForces { ue, fe, kmax }
             })
             .collect()

@@ -103,7 +103,8 @@ pub fn contact_vtu(model: &Model, st: &State, compress: bool) -> Vec<u8> {
     }
     data.push(vtu::Field::vector("traction", traction));
     data.push(vtu::Field::vector("normal", normal));
-    vtu::unstructured(&points, &cells, vtu::Kind::Line3, &data, &[], compress)
+    let topology = vtu::Topology::new(&points, &cells, vtu::Kind::Line3);
+    vtu::unstructured(&topology, &data, &[], compress).to_vec()
 }
 
 /// The per-step CSV along the slave face.
@@ -127,11 +128,10 @@ pub fn contact_csv(model: &Model, st: &State) -> String {
 }
 
 /// The parts of the bodies dataset that are the same at every step: the active nodes (as
-/// points) and the cells over them, with each cell's body.
+/// points), the cells over them and each cell's body.
 pub struct BodiesMesh {
-    points: Vec<[f64; 2]>,
-    cells: Vec<Vec<usize>>,
-    body: Vec<f64>,
+    topology: vtu::Topology,
+    cell_data: [vtu::Field; 1],
 }
 
 impl BodiesMesh {
@@ -144,31 +144,23 @@ impl BodiesMesh {
                 points.push(model.mesh.nodes[n]);
             }
         }
-        let cells = model
+        let cells: Vec<[usize; 6]> = model
             .elems
             .iter()
-            .map(|(e, _)| {
-                model.mesh.triangles[*e]
-                    .nodes
-                    .iter()
-                    .map(|&n| index[n])
-                    .collect()
-            })
+            .map(|(e, _)| model.mesh.triangles[*e].nodes.map(|n| index[n]))
             .collect();
         let body = model.elem_body.iter().map(|&b| b as f64).collect();
         BodiesMesh {
-            points,
-            cells,
-            body,
+            topology: vtu::Topology::new(&points, &cells, vtu::Kind::Tri6),
+            cell_data: [vtu::Field::scalar("body_id", body)],
         }
     }
 }
 
-/// The bodies dataset of one step: displacement, stresses, von Mises, body id
-/// (`compress`: zlib-compressed arrays).
-pub fn bodies_vtu(model: &Model, mesh: &BodiesMesh, u: &[f64], compress: bool) -> Vec<u8> {
+/// The point fields of the bodies dataset at one step: displacement, stresses, von Mises.
+pub fn bodies_fields(model: &Model, u: &[f64]) -> Vec<vtu::Field> {
     let stress = model.nodal_stresses(u);
-    let n = mesh.points.len();
+    let n = model.active.iter().filter(|&&a| a).count();
     let mut disp = Vec::with_capacity(n * 3);
     let (mut sxx, mut syy, mut sxy, mut szz, mut vm) = (
         Vec::with_capacity(n),
@@ -190,19 +182,22 @@ pub fn bodies_vtu(model: &Model, mesh: &BodiesMesh, u: &[f64], compress: bool) -
         szz.push(s[3]);
         vm.push(crate::elasticity::von_mises(s[0], s[1], s[2], s[3]));
     }
-    vtu::unstructured(
-        &mesh.points,
-        &mesh.cells,
-        vtu::Kind::Tri6,
-        &[
-            vtu::Field::vector("displacement", disp),
-            vtu::Field::scalar("stress_xx", sxx),
-            vtu::Field::scalar("stress_yy", syy),
-            vtu::Field::scalar("stress_xy", sxy),
-            vtu::Field::scalar("stress_zz", szz),
-            vtu::Field::scalar("von_mises", vm),
-        ],
-        &[vtu::Field::scalar("body_id", mesh.body.clone())],
-        compress,
-    )
+    vec![
+        vtu::Field::vector("displacement", disp),
+        vtu::Field::scalar("stress_xx", sxx),
+        vtu::Field::scalar("stress_yy", syy),
+        vtu::Field::scalar("stress_xy", sxy),
+        vtu::Field::scalar("stress_zz", szz),
+        vtu::Field::scalar("von_mises", vm),
+    ]
+}
+
+/// The bodies dataset of one step from its [`bodies_fields`] (`compress`: zlib-compressed
+/// arrays).
+pub fn bodies_vtu<'a>(
+    mesh: &'a BodiesMesh,
+    fields: &'a [vtu::Field],
+    compress: bool,
+) -> vtu::Encoded<'a> {
+    vtu::unstructured(&mesh.topology, fields, &mesh.cell_data, compress)
 }

@@ -10,7 +10,8 @@
 //! bit for bit), and their bodies datasets are encoded in parallel. Its first error stops it;
 //! the driver sees that error at its next step, and stops.
 
-use super::fields::{BodiesMesh, bodies_vtu, contact_csv, contact_vtu};
+use super::vtu::Field;
+use super::fields::{BodiesMesh, bodies_fields, bodies_vtu, contact_csv, contact_vtu};
 use super::{PvdEntry, pvd};
 use crate::contact::solver::State;
 use crate::error::RunError;
@@ -24,6 +25,14 @@ use std::time::Instant;
 /// Writes `bytes` to `path` atomically, the error naming the file.
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
     super::write_atomic(path, bytes).map_err(|source| RunError::Write {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
+/// Writes the byte strings `parts` to `path` atomically, the error naming the file.
+fn write_parts(path: &Path, parts: &[&[u8]]) -> Result<(), RunError> {
+    super::write_atomic_parts(path, parts).map_err(|source| RunError::Write {
         path: path.display().to_string(),
         source,
     })
@@ -93,6 +102,7 @@ impl<'a> Series<'a> {
     pub fn write(&mut self, steps: Vec<StepOutput>) -> Result<(), RunError> {
         use rayon::prelude::*;
         let t = Instant::now();
+        crate::trace::mark(&format!("write batch of {} from step {}", steps.len(), steps[0].step));
         let model = self.model;
         // The fields recovered from contact states: one block solve for the batch.
         let states: Vec<(f64, &State)> = steps
@@ -120,24 +130,34 @@ impl<'a> Series<'a> {
                 let _ = tx.send(u.to_vec());
             }
         }
-        let mesh = &*self.mesh.get_or_insert_with(|| BodiesMesh::new(model));
-        let compress = self.compress;
-        let bodies: Vec<Vec<u8>> = fields
+        crate::trace::mark("fields recovered");
+        let point_data: Vec<Vec<Field>> = fields
             .par_iter()
-            .map(|u| bodies_vtu(model, mesh, u, compress))
+            .map(|u| bodies_fields(model, u))
             .collect();
-        for (s, bytes) in steps.into_iter().zip(bodies) {
-            self.write_files(s, &bytes)?;
-        }
+        crate::trace::mark("point fields");
+        // Taken out while the files are written, which borrows `self`.
+        let mesh = self.mesh.take().unwrap_or_else(|| BodiesMesh::new(model));
+        let written = steps
+            .into_iter()
+            .zip(&point_data)
+            .try_for_each(|(s, data)| {
+                let bodies = bodies_vtu(&mesh, data, self.compress);
+                self.write_files(s, &bodies.parts())
+            });
+        self.mesh = Some(mesh);
+        written?;
         self.seconds += t.elapsed().as_secs_f64();
+        crate::trace::mark("batch written");
         Ok(())
     }
 
-    /// Writes one step's files given its bodies dataset.
-    fn write_files(&mut self, s: StepOutput, bodies: &[u8]) -> Result<(), RunError> {
+    /// Writes one step's files given its bodies dataset (as the byte strings of the file).
+    fn write_files(&mut self, s: StepOutput, bodies: &[&[u8]]) -> Result<(), RunError> {
         let (model, stem, step) = (self.model, self.stem, s.step);
         let name = format!("{stem}_{step:04}.vtu");
-        write_file(&self.dir.join(&name), bodies)?;
+        write_parts(&self.dir.join(&name), bodies)?;
+        crate::trace::mark("bodies file written");
         self.entries.push(PvdEntry {
             time: s.time,
             part: 0,

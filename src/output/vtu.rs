@@ -7,6 +7,7 @@
 //! The arrays: `Float64` points (z = 0) and fields, `UInt64` connectivity and offsets,
 //! `UInt8` cell types (22 quadratic triangle, 21 quadratic edge).
 
+use std::borrow::Cow;
 use std::fmt::Write as _;
 
 /// A field on points or cells: name, number of components, values (component-fastest).
@@ -59,7 +60,7 @@ enum Values<'a> {
     U8(&'a [u8]),
 }
 
-impl Values<'_> {
+impl<'a> Values<'a> {
     fn vtk_type(&self) -> &'static str {
         match self {
             Values::F64(_) => "Float64",
@@ -76,17 +77,23 @@ impl Values<'_> {
         }
     }
 
-    /// Appends the values' little-endian bytes to `out`.
-    fn put(&self, out: &mut Vec<u8>) {
-        out.reserve(self.byte_len());
-        match self {
-            Values::F64(v) => v
-                .iter()
-                .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
-            Values::U64(v) => v
-                .iter()
-                .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
-            Values::U8(v) => out.extend_from_slice(v),
+    /// The values' little-endian bytes: the values' own memory on a little-endian machine.
+    fn le_bytes(&self) -> Cow<'a, [u8]> {
+        #[cfg(target_endian = "little")]
+        {
+            match *self {
+                Values::F64(v) => Cow::Borrowed(bytemuck::cast_slice(v)),
+                Values::U64(v) => Cow::Borrowed(bytemuck::cast_slice(v)),
+                Values::U8(v) => Cow::Borrowed(v),
+            }
+        }
+        #[cfg(not(target_endian = "little"))]
+        {
+            match *self {
+                Values::F64(v) => Cow::Owned(v.iter().flat_map(|x| x.to_le_bytes()).collect()),
+                Values::U64(v) => Cow::Owned(v.iter().flat_map(|x| x.to_le_bytes()).collect()),
+                Values::U8(v) => Cow::Borrowed(v),
+            }
         }
     }
 }
@@ -113,13 +120,11 @@ fn escape(s: &str) -> String {
 /// `[1, n, n, compressed n]` (no blocks for no bytes) and the zlib stream.
 fn zlib_block(values: &Values) -> Vec<u8> {
     let n = values.byte_len();
-    let mut raw = Vec::new();
-    values.put(&mut raw);
     if n == 0 {
         // No blocks.
         return [0u64, 0, 0].iter().flat_map(|h| h.to_le_bytes()).collect();
     }
-    let z = miniz_oxide::deflate::compress_to_vec_zlib(&raw, ZLIB_LEVEL);
+    let z = miniz_oxide::deflate::compress_to_vec_zlib(&values.le_bytes(), ZLIB_LEVEL);
     let mut out = Vec::with_capacity(32 + z.len());
     for h in [1, n as u64, n as u64, z.len() as u64] {
         out.extend_from_slice(&h.to_le_bytes());
@@ -128,24 +133,68 @@ fn zlib_block(values: &Values) -> Vec<u8> {
     out
 }
 
-/// Serialises an unstructured grid of quadratic cells (points in 2-D, z = 0); `compress`
-/// writes every array as one zlib block.
-pub fn unstructured(
-    points: &[[f64; 2]],
-    cells: &[Vec<usize>],
-    kind: Kind,
-    point_data: &[Field],
-    cell_data: &[Field],
-    compress: bool,
-) -> Vec<u8> {
-    let pts: Vec<f64> = points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect();
-    let mut connectivity = Vec::new();
-    let mut offsets = Vec::with_capacity(cells.len());
-    for c in cells {
-        connectivity.extend(c.iter().map(|&i| i as u64));
-        offsets.push(connectivity.len() as u64);
+/// The points and cells of an unstructured grid of quadratic cells in the arrays VTK reads
+/// (points in 3-D with z = 0): built once for a mesh that is written at many steps.
+pub struct Topology {
+    points: Vec<f64>,
+    connectivity: Vec<u64>,
+    offsets: Vec<u64>,
+    types: Vec<u8>,
+}
+
+impl Topology {
+    /// The grid of `points` (2-D) and `cells` (indices into `points`) of one `kind`.
+    pub fn new<C: AsRef<[usize]>>(points: &[[f64; 2]], cells: &[C], kind: Kind) -> Topology {
+        let points = points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect();
+        let mut connectivity = Vec::new();
+        let mut offsets = Vec::with_capacity(cells.len());
+        for c in cells {
+            connectivity.extend(c.as_ref().iter().map(|&i| i as u64));
+            offsets.push(connectivity.len() as u64);
+        }
+        Topology {
+            points,
+            connectivity,
+            offsets,
+            types: vec![kind.code(); cells.len()],
+        }
     }
-    let types = vec![kind.code(); cells.len()];
+
+    fn n_points(&self) -> usize {
+        self.points.len() / 3
+    }
+
+    fn n_cells(&self) -> usize {
+        self.types.len()
+    }
+}
+
+/// A serialised `.vtu` file as the byte strings that follow each other in it (the XML header,
+/// each array's block, the closing tags): the arrays of raw output are borrowed, not copied.
+pub struct Encoded<'a> {
+    parts: Vec<Cow<'a, [u8]>>,
+}
+
+impl Encoded<'_> {
+    /// The file's byte strings, in order.
+    pub fn parts(&self) -> Vec<&[u8]> {
+        self.parts.iter().map(|p| &p[..]).collect()
+    }
+
+    /// The whole file.
+    pub fn to_vec(&self) -> Vec<u8> {
+        self.parts.concat()
+    }
+}
+
+/// Serialises an unstructured grid: `point_data` and `cell_data` on `topology`; `compress`
+/// writes every array as one zlib block.
+pub fn unstructured<'a>(
+    topology: &'a Topology,
+    point_data: &'a [Field],
+    cell_data: &'a [Field],
+    compress: bool,
+) -> Encoded<'a> {
     fn field(f: &Field) -> Array<'_> {
         Array {
             name: Some(&f.name),
@@ -160,23 +209,23 @@ pub fn unstructured(
     let points_array = Array {
         name: None,
         ncomp: 3,
-        values: Values::F64(&pts),
+        values: Values::F64(&topology.points),
     };
     let cell_arrays_topology = [
         Array {
             name: Some("connectivity"),
             ncomp: 1,
-            values: Values::U64(&connectivity),
+            values: Values::U64(&topology.connectivity),
         },
         Array {
             name: Some("offsets"),
             ncomp: 1,
-            values: Values::U64(&offsets),
+            values: Values::U64(&topology.offsets),
         },
         Array {
             name: Some("types"),
             ncomp: 1,
-            values: Values::U8(&types),
+            values: Values::U8(&topology.types),
         },
     ];
     let sections: [(&str, &[Array]); 4] = [
@@ -185,21 +234,29 @@ pub fn unstructured(
         ("Points", std::slice::from_ref(&points_array)),
         ("Cells", &cell_arrays_topology),
     ];
+    let all: Vec<&Array<'a>> = sections.iter().flat_map(|(_, a)| a.iter()).collect();
 
-    // Compressed arrays are encoded first (their sizes give the offsets), in parallel; raw
-    // ones are written straight into the file after the header.
-    let encoded: Option<Vec<Vec<u8>>> = compress.then(|| {
+    // Each array's block: the compressed ones are encoded first (their sizes give the
+    // offsets), in parallel; a raw one is its byte count and its values' own bytes.
+    let blocks: Vec<Cow<'a, [u8]>> = if compress {
         use rayon::prelude::*;
-        let all: Vec<&Array> = sections.iter().flat_map(|(_, a)| a.iter()).collect();
-        all.par_iter().map(|a| zlib_block(&a.values)).collect()
-    });
-    let sizes: Vec<usize> = match &encoded {
-        Some(e) => e.iter().map(Vec::len).collect(),
-        None => sections
-            .iter()
-            .flat_map(|(_, arrays)| arrays.iter())
-            .map(|a| 8 + a.values.byte_len())
-            .collect(),
+        all.par_iter()
+            .map(|a| Cow::Owned(zlib_block(&a.values)))
+            .collect()
+    } else {
+        all.iter()
+            .flat_map(|a| {
+                [
+                    Cow::Owned((a.values.byte_len() as u64).to_le_bytes().to_vec()),
+                    a.values.le_bytes(),
+                ]
+            })
+            .collect()
+    };
+    let sizes: Vec<usize> = if compress {
+        blocks.iter().map(|b| b.len()).collect()
+    } else {
+        all.iter().map(|a| 8 + a.values.byte_len()).collect()
     };
 
     let mut xml = String::new();
@@ -212,8 +269,8 @@ pub fn unstructured(
     let _ = writeln!(
         xml,
         "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
-        points.len(),
-        cells.len()
+        topology.n_points(),
+        topology.n_cells()
     );
     let (mut k, mut offset) = (0, 0usize);
     for (section, arrays) in sections {
@@ -247,17 +304,9 @@ pub fn unstructured(
     xml += "    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n   _";
     let tail = "\n  </AppendedData>\n</VTKFile>\n";
 
-    let mut out = Vec::with_capacity(xml.len() + offset + tail.len());
-    out.extend_from_slice(xml.as_bytes());
-    match encoded {
-        Some(e) => e.iter().for_each(|b| out.extend_from_slice(b)),
-        None => {
-            for a in sections.iter().flat_map(|(_, arrays)| arrays.iter()) {
-                out.extend_from_slice(&(a.values.byte_len() as u64).to_le_bytes());
-                a.values.put(&mut out);
-            }
-        }
-    }
-    out.extend_from_slice(tail.as_bytes());
-    out
+    let mut parts = Vec::with_capacity(blocks.len() + 2);
+    parts.push(Cow::Owned(xml.into_bytes()));
+    parts.extend(blocks);
+    parts.push(Cow::Borrowed(tail.as_bytes()));
+    Encoded { parts }
 }

@@ -299,11 +299,6 @@ pub fn sweep(
     on_row: &(dyn Fn(SweepRow) -> Result<(), SweepError> + Sync),
 ) -> Result<(), SweepError> {
     use rayon::prelude::*;
-    // Every row's self-checks take the internal forces of its field: integrate the element
-    // matrices once for all of them.
-    if rows.len() > 1 {
-        model.keep_element_stiffness();
-    }
     // The rows run in chunks of eight per thread; the fields the checks need are recovered for
     // a whole chunk in one block solve, which reads the factor (≈ 200 MB on L5) once instead of
     // once per row.

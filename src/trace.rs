@@ -1,0 +1,30 @@
+//! An opt-in timeline of a run: with `STICKSLIP_TRACE=1`, [`mark`] prints the milliseconds
+//! since the process started (first call of [`start`]) and a label to standard error. Used to
+//! find where the wall time of a run goes outside the timed phases of `summary.json`.
+
+use std::sync::OnceLock;
+use std::time::Instant;
+
+static START: OnceLock<Option<Instant>> = OnceLock::new();
+
+fn origin() -> Option<Instant> {
+    *START.get_or_init(|| {
+        std::env::var_os("STICKSLIP_TRACE")
+            .is_some_and(|v| v != "0" && !v.is_empty())
+            .then(Instant::now)
+    })
+}
+
+/// Starts the clock (call first thing in `main`).
+pub fn start() {
+    origin();
+}
+
+/// Prints `label` with the time since [`start`], if tracing is on.
+pub fn mark(label: &str) {
+    if let Some(t0) = origin() {
+        let ms = t0.elapsed().as_secs_f64() * 1e3;
+        let thread = std::thread::current();
+        eprintln!("trace {ms:9.1} ms [{}] {label}", thread.name().unwrap_or("-"));
+    }
+}
