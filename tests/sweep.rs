@@ -4,7 +4,7 @@
 //! Fig. 6 regime.
 
 mod common;
-use common::{shipped_case_on, stickslip, tempdir};
+use common::{run_case, shipped_case_on, stickslip, tempdir};
 use serde_json::{Value, json};
 use std::path::Path;
 
@@ -136,4 +136,55 @@ fn sweep_over_loads_with_the_case_law() {
         "{err}"
     );
     assert!(!dir.join("o3").exists());
+}
+
+/// Every row of a sweep is what `stickslip run` of its law gives, bit for bit (the last step's
+/// b and c, the friction figures, the self-checks, the Newton iterations and factorisations). The rows share
+/// their factorised Delassus blocks (on L3 the structured contact solve factorises them), so
+/// this holds only if sharing changes no arithmetic.
+#[test]
+fn sweep_rows_are_bit_for_bit_the_single_runs_of_their_laws() {
+    let mut v = shipped_case_on("fig2.json", "vm272_L3.msh");
+    v["output"] = json!({"vtu": false});
+    let dir = tempdir("sweep-vs-runs");
+    std::fs::write(dir.join("case.json"), serde_json::to_string(&v).unwrap()).unwrap();
+    let laws = [
+        json!({"shape": "ramp", "fs": 0.15, "fd": 0.1, "lambda": 0.05, "radius": 4.0, "load": 10.0}),
+        json!({"shape": "step", "fs": 0.2, "fd": 0.1, "lambda": 0.05, "radius": 4.0, "load": 10.0}),
+        json!({"shape": "exponential", "fs": 0.12, "fd": 0.1, "lambda": 0.02, "radius": 4.0, "load": 10.0}),
+    ];
+    std::fs::write(dir.join("laws.json"), json!({"friction": laws}).to_string()).unwrap();
+    let out = dir.join("out");
+    let (code, _, err) = stickslip(&[
+        "sweep",
+        dir.join("case.json").to_str().unwrap(),
+        dir.join("laws.json").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--no-cache",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let table: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    let rows = table["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), laws.len());
+    for (k, (row, law)) in rows.iter().zip(&laws).enumerate() {
+        let mut case = v.clone();
+        case["contact"]["friction"] = law.clone();
+        let run = run_case(&format!("sweep-vs-run-{k}"), &case, &["--no-cache"]);
+        let s = run.summary();
+        assert_eq!(row["status"], s["status"], "law {k}");
+        let last = &s["steps"][40]["contact"];
+        assert_eq!(row["steps"], 41, "law {k}");
+        for key in ["b", "c"] {
+            assert_eq!(row[key], last[key], "law {k}: {key}");
+        }
+        // Q_max, the apparent friction and the law's scales; the self-checks' values.
+        assert_eq!(row["friction"], s["friction"], "law {k}");
+        assert_eq!(row["checks"], s["checks"], "law {k}");
+        assert_eq!(row["newton_iterations"], s["newton_iterations"], "law {k}");
+        assert_eq!(row["lu_factorisations"], s["lu_factorisations"], "law {k}");
+        assert!(s["lu_factorisations"].as_u64().unwrap() >= 2, "law {k}: {}", s["lu_factorisations"]);
+    }
 }

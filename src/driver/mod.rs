@@ -145,7 +145,7 @@ pub fn simulate_with(
                 .map_or_else(Default::default, |f| f.history),
         }),
         cstate: model.contact.as_ref().map(|c| c.system.initial_state()),
-        lu_cache: solver::LuCache::default(),
+        lu_cache: solver::LuCache::sharing(model.contact_blocks()),
         control: [Control::Force(0.0); 2],
         pilot: PilotState::default(),
         scale: 0.0,

@@ -104,6 +104,9 @@ pub struct Model {
     /// the write when the model is dropped.
     #[allow(dead_code)]
     cache_job: Option<crate::cache::Job>,
+    /// The factorised Delassus blocks shared by the simulations of this model once
+    /// [`Model::share_contact_blocks`] has been called (a sweep does).
+    contact_blocks: std::sync::OnceLock<std::sync::Arc<crate::contact::solver::BlockStore>>,
     /// The mesh's diameter and the largest Young's modulus of the bodies in use (see
     /// [`Model::scales`]).
     scales: std::sync::OnceLock<(f64, f64)>,
@@ -387,6 +390,7 @@ impl Model {
             timings: timings.clone(),
             cache: cache_report,
             cache_job,
+            contact_blocks: std::sync::OnceLock::new(),
             scales: std::sync::OnceLock::new(),
         })
     }

@@ -56,6 +56,17 @@ pub struct ElementForces {
 }
 
 impl Model {
+    /// From now on the simulations of this model share their factorised Delassus blocks (see
+    /// [`crate::contact::solver::BlockStore`]): for a sweep, whose rows run side by side.
+    pub fn share_contact_blocks(&self) {
+        self.contact_blocks.get_or_init(Default::default);
+    }
+
+    /// Where the simulations of this model share their factorised Delassus blocks, if they do.
+    pub fn contact_blocks(&self) -> Option<std::sync::Arc<crate::contact::solver::BlockStore>> {
+        self.contact_blocks.get().cloned()
+    }
+
     /// The nodal displacements and internal forces of every element for the free solution `u`
     /// (prescribed values included), in the order of `self.elems`.
     pub fn element_forces(&self, u: &[f64]) -> Vec<ElementForces> {

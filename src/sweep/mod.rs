@@ -299,6 +299,10 @@ pub fn sweep(
     on_row: &(dyn Fn(SweepRow) -> Result<(), SweepError> + Sync),
 ) -> Result<(), SweepError> {
     use rayon::prelude::*;
+    // The rows factorise the same Delassus blocks: once for all of them.
+    if rows.len() > 1 {
+        model.share_contact_blocks();
+    }
     // The rows run in chunks of eight per thread; the fields the checks need are recovered for
     // a whole chunk in one block solve, which reads the factor (≈ 200 MB on L5) once instead of
     // once per row.

@@ -5,6 +5,7 @@
 use super::{NewtonRows, SpecialRow};
 use faer::Mat;
 use faer::linalg::solvers::Solve;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// `x += a g`.
@@ -54,16 +55,15 @@ pub struct LuCache {
     /// by position `q` (empty: not yet).
     k_unk: Vec<usize>,
     k_pos: Vec<usize>,
-    k_llt: Option<faer::linalg::solvers::Llt<f64>>,
+    k_llt: Option<Arc<Block>>,
     k_cols: Vec<Vec<f64>>,
     /// The right-hand side `b̃` (by position in `K`) of the last direct solve with the factor
     /// and `x̃ = K⁻¹ b̃` (empty: none since the factorisation or the last checkpoint).
     bt: Vec<f64>,
     xt: Vec<f64>,
-    /// The rows of `W` outside the block and `W[out_rows, k_unk]`, contiguous for the product
-    /// of every iteration.
-    out_rows: Vec<usize>,
-    w_out: Option<Mat<f64>>,
+    /// Where factorised blocks are shared with the other simulations of the same model (a
+    /// sweep's rows), if anywhere.
+    shared: Option<Arc<BlockStore>>,
     /// The batches of columns of `G` solved for since `K` was factorised (positions in `K`),
     /// in order: with `k_unk`, what a resumed run replays to reach the same factors.
     batches: Vec<Vec<usize>>,
@@ -93,6 +93,87 @@ pub struct SolveTimings {
     pub woodbury: f64,
     /// Products with `W` for the rows outside the system.
     pub products: f64,
+}
+
+/// A factorised Delassus block `K = W[unk, unk]`: its Cholesky factor, and the rows of `W`
+/// outside it with `W[out_rows, unk]`, contiguous for the product of every iteration.
+pub struct Block {
+    llt: faer::linalg::solvers::Llt<f64>,
+    out_rows: Vec<usize>,
+    w_out: Mat<f64>,
+}
+
+impl Block {
+    /// Factorises `W[unk, unk]`; `None` if it is singular or not numerically positive definite.
+    fn factorise(w: &Mat<f64>, unk: &[usize]) -> Option<Block> {
+        let k = Mat::from_fn(unk.len(), unk.len(), |i, j| w[(unk[i], unk[j])]);
+        let llt = k.llt(faer::Side::Lower).ok()?;
+        // The pivots are L_ii²: as for an LU, singular when the smallest is below 1e-12 of the
+        // largest; and pivots within 2^52 of the smallest normal number have lost digits to
+        // underflow (absurd moduli make W that small).
+        let pivots: Vec<f64> = (0..unk.len()).map(|i| llt.L()[(i, i)].powi(2)).collect();
+        let lo = pivots.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = pivots.iter().copied().fold(0.0, f64::max);
+        if lo <= 1e-12 * hi || lo < f64::MIN_POSITIVE / f64::EPSILON {
+            return None;
+        }
+        let mut inside = vec![false; w.nrows()];
+        unk.iter().for_each(|&u| inside[u] = true);
+        let out_rows: Vec<usize> = (0..w.nrows()).filter(|&i| !inside[i]).collect();
+        let w_out = Mat::from_fn(out_rows.len(), unk.len(), |r, q| w[(out_rows[r], unk[q])]);
+        Some(Block {
+            llt,
+            out_rows,
+            w_out,
+        })
+    }
+}
+
+/// Factorised Delassus blocks shared by the simulations of one model that run side by side (a
+/// sweep's rows, which through the same loads factorise the same blocks: Fig. 2's 50-law sweep
+/// on L5 needs 4 distinct blocks for its 200 factorisations). The first simulation to need a
+/// block factorises it and the others wait for it and reuse it. A factorisation is sequential
+/// and depends only on `W` and the unknowns, so each simulation's results are bit for bit
+/// those it gets alone. Blocks beyond [`BlockStore::MAX_BYTES`] are not kept: each simulation
+/// factorises those itself.
+#[derive(Default)]
+pub struct BlockStore {
+    blocks: std::sync::Mutex<(usize, std::collections::HashMap<Vec<usize>, Arc<BlockSlot>>)>,
+}
+
+/// One block of a [`BlockStore`]: factorised once (`None`: singular).
+type BlockSlot = std::sync::OnceLock<Option<Arc<Block>>>;
+
+impl BlockStore {
+    /// Bytes of factors a store keeps at most (about 16 blocks of 1 000 unknowns, or 2 of
+    /// 4 000 as on L7).
+    pub const MAX_BYTES: usize = 256 << 20;
+
+    /// The factorised block `W[unk, unk]`, from the store or factorised now.
+    fn get(&self, w: &Mat<f64>, unk: &[usize]) -> Option<Arc<Block>> {
+        // The factor and W[out_rows, unk].
+        let estimate = 8 * unk.len() * w.nrows();
+        let slot = {
+            let mut guard = self.blocks.lock().unwrap_or_else(|e| e.into_inner());
+            let (bytes, map) = &mut *guard;
+            match map.get(unk) {
+                Some(slot) => Some(slot.clone()),
+                None if *bytes + estimate <= Self::MAX_BYTES => {
+                    *bytes += estimate;
+                    let slot = Arc::new(BlockSlot::new());
+                    map.insert(unk.to_vec(), slot.clone());
+                    Some(slot)
+                }
+                None => None,
+            }
+        };
+        match slot {
+            Some(slot) => slot
+                .get_or_init(|| Block::factorise(w, unk).map(Arc::new))
+                .clone(),
+            None => Block::factorise(w, unk).map(Arc::new),
+        }
+    }
 }
 
 /// The factorised Delassus block and the columns of `G` computed from it, by what produced
@@ -125,6 +206,14 @@ const PREFETCH: usize = 64;
 const GMRES_MAX: usize = 12;
 
 impl LuCache {
+    /// A cache that shares its factorised Delassus blocks through `store` (see [`BlockStore`]).
+    pub fn sharing(store: Option<Arc<BlockStore>>) -> LuCache {
+        LuCache {
+            shared: store,
+            ..Default::default()
+        }
+    }
+
     /// Forgets the factorisations.
     pub fn clear(&mut self) {
         self.lu = None;
@@ -140,8 +229,6 @@ impl LuCache {
         self.k_cols.clear();
         self.forget_direct();
         self.batches.clear();
-        self.out_rows.clear();
-        self.w_out = None;
     }
 
     /// Forgets the last direct solve (the next system is solved directly).
@@ -248,7 +335,7 @@ impl LuCache {
             && self.xt.len() == nk
             && (0..nk).all(|q| is_special[q] || b[q].to_bits() == self.bt[q].to_bits());
         if !reuse {
-            let llt = self.k_llt.as_ref()?;
+            let llt = &self.k_llt.as_ref()?.llt;
             let mut x0 = Mat::from_fn(nk, 1, |i, _| b[i]);
             llt.solve_in_place(&mut x0);
             self.bt = b.clone();
@@ -340,7 +427,7 @@ impl LuCache {
     /// Solves for the columns `G = K⁻¹ e_q` at positions `qs` in one solve with several
     /// right-hand sides, and records the batch; `None` if `K` is not factorised.
     fn solve_columns(&mut self, qs: Vec<usize>) -> Option<()> {
-        let llt = self.k_llt.as_ref()?;
+        let llt = &self.k_llt.as_ref()?.llt;
         let nk = self.k_unk.len();
         let mut e = Mat::<f64>::zeros(nk, qs.len());
         for (c, &q) in qs.iter().enumerate() {
@@ -470,16 +557,17 @@ impl LuCache {
         for (&u, &xu) in rows.unk.iter().zip(&xs) {
             xk[(self.k_pos[u], 0)] = xu;
         }
-        let mut prod = Mat::<f64>::zeros(self.out_rows.len(), 1);
+        let block = self.k_llt.as_ref().expect("solved with the factor");
+        let mut prod = Mat::<f64>::zeros(block.out_rows.len(), 1);
         faer::linalg::matmul::matmul(
             prod.as_mut(),
             faer::Accum::Replace,
-            self.w_out.as_ref().expect("kept with the factor").as_ref(),
+            block.w_out.as_ref(),
             xk.as_ref(),
             1.0,
             faer::Par::Seq,
         );
-        for (r, &i) in self.out_rows.iter().enumerate() {
+        for (r, &i) in block.out_rows.iter().enumerate() {
             w_mu[i] = prod[(r, 0)];
         }
         // Rows of K not in this system (nodes that left the contact): dot products.
@@ -495,33 +583,19 @@ impl LuCache {
     /// Factorises `K = W[unk, unk]` for [`Self::solve_rows`]; `None` if it is singular or not
     /// numerically positive definite.
     fn factorise_block(&mut self, w: &Mat<f64>, unk: &[usize]) -> Option<()> {
-        let k = Mat::from_fn(unk.len(), unk.len(), |i, j| w[(unk[i], unk[j])]);
-        let llt = k.llt(faer::Side::Lower).ok();
         self.factorisations += 1;
         self.forget_block();
-        let llt = llt?;
-        // The pivots are L_ii²: as for an LU, singular when the smallest is below 1e-12 of the
-        // largest; and pivots within 2^52 of the smallest normal number have lost digits to
-        // underflow (absurd moduli make W that small).
-        let pivots: Vec<f64> = (0..unk.len()).map(|i| llt.L()[(i, i)].powi(2)).collect();
-        let lo = pivots.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = pivots.iter().copied().fold(0.0, f64::max);
-        if lo <= 1e-12 * hi || lo < f64::MIN_POSITIVE / f64::EPSILON {
-            return None;
-        }
+        let block = match &self.shared {
+            Some(store) => store.get(w, unk),
+            None => Block::factorise(w, unk).map(Arc::new),
+        }?;
         self.k_pos = vec![usize::MAX; w.nrows()];
         for (q, &u) in unk.iter().enumerate() {
             self.k_pos[u] = q;
         }
         self.k_unk = unk.to_vec();
         self.k_cols = vec![Vec::new(); unk.len()];
-        self.out_rows = (0..w.nrows())
-            .filter(|&i| self.k_pos[i] == usize::MAX)
-            .collect();
-        self.w_out = Some(Mat::from_fn(self.out_rows.len(), unk.len(), |r, q| {
-            w[(self.out_rows[r], unk[q])]
-        }));
-        self.k_llt = Some(llt);
+        self.k_llt = Some(block);
         Some(())
     }
 

@@ -40,7 +40,7 @@ mod linalg;
 mod newton;
 
 pub use enforce::{Equation, NewtonRows, NewtonSystem, SlipLin, SpecialRow};
-pub use linalg::{BlockRecord, LuCache, SolveTimings};
+pub use linalg::{BlockRecord, BlockStore, LuCache, SolveTimings};
 
 use crate::friction::FrictionLaw;
 use faer::Mat;
