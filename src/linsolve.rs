@@ -321,6 +321,7 @@ impl PartialCholesky {
 #[derive(Clone)]
 pub struct SaddleSymbolic {
     inner: std::sync::Arc<faer::sparse::linalg::cholesky::SymbolicCholesky<usize>>,
+    layout: std::sync::Arc<Supernodes>,
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
     n: usize,
@@ -329,7 +330,7 @@ pub struct SaddleSymbolic {
 
 /// A numeric `L D Lᵀ` factorisation of a saddle-point matrix (see [`SaddleSymbolic`]).
 pub struct SaddleFactor {
-    symbolic: std::sync::Arc<faer::sparse::linalg::cholesky::SymbolicCholesky<usize>>,
+    layout: std::sync::Arc<Supernodes>,
     /// The factor's values, shared with a model-cache writer ([`crate::cache`]).
     values: SharedValues,
     n: usize,
@@ -482,9 +483,10 @@ impl SaddleSymbolic {
                 n: size,
             },
         })?;
-        supernodal(&inner)?;
+        let layout = std::sync::Arc::new(Supernodes::of(&inner)?);
         Ok(SaddleSymbolic {
             inner: std::sync::Arc::new(inner),
+            layout,
             col_ptr: cp,
             row_idx: ri,
             n,
@@ -580,18 +582,15 @@ impl SaddleSymbolic {
         let f = self.from_values(std::sync::Arc::new(FactorValues::Owned(l)))?;
         // K̂ must be positive definite: every pivot of its block positive (a body that nothing
         // holds gives a vanishing or negative one).
-        let sn = supernodal(&f.symbolic)?;
-        let lref = SupernodalLltRef::new(sn, &f.values);
         let mut dmax: f64 = 0.0;
-        for s in 0..sn.n_supernodes() {
-            let node = lref.supernode(s);
-            let v = node.val();
-            for j in 0..v.ncols() {
-                let col = node.start() + j;
+        for s in 0..f.layout.n_supernodes() {
+            let node = f.layout.node(s, &f.values);
+            for j in 0..node.ncols {
+                let col = node.start + j;
                 if col >= n {
                     break;
                 }
-                let d = v[(j, j)];
+                let d = node.at(j, j);
                 dmax = dmax.max(d.abs());
                 if d.partial_cmp(&(1e-14 * dmax)) != Some(std::cmp::Ordering::Greater) {
                     return Err(FactorError::NotPositiveDefinite { pivot: col, n });
@@ -604,22 +603,141 @@ impl SaddleSymbolic {
     /// The factorisation with the values of an earlier numeric factorisation on this analysis
     /// ([`SaddleFactor::values`]).
     pub fn from_values(&self, l: SharedValues) -> Result<SaddleFactor, FactorError> {
-        if l.len() != self.inner.len_val() {
-            return Err(FactorError::FactorLength {
-                len: l.len(),
-                expected: self.inner.len_val(),
-            });
-        }
-        Ok(SaddleFactor {
-            symbolic: self.inner.clone(),
-            values: l,
-            n: self.n,
-            m: self.m,
-        })
+        SaddleFactor::from_layout(self.layout.clone(), l, self.n, self.m)
     }
 }
 
-use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
+/// The supernodal layout of a saddle factor, which its solves and its Delassus operator read:
+/// copied out of faer's symbolic analysis, or restored from the model cache (so that a cache hit
+/// needs no symbolic analysis). Supernode `s` has the columns `begin[s]..begin[s + 1]`, the
+/// off-diagonal rows `rows[row_ptr[s]..row_ptr[s + 1]]` (ascending) and its values at
+/// `val_ptr[s]..val_ptr[s + 1]` of the factor's values, column-major with its columns' rows
+/// then the off-diagonal rows (the diagonal block holds `D` on its diagonal under a unit
+/// lower triangle). `fwd[new] = old` is the ordering of the saddle-point matrix.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Supernodes {
+    pub begin: Vec<usize>,
+    pub row_ptr: Vec<usize>,
+    pub rows: Vec<usize>,
+    pub val_ptr: Vec<usize>,
+    pub fwd: Vec<usize>,
+}
+
+/// One supernode of a [`Supernodes`] layout with its values.
+struct Node<'a> {
+    start: usize,
+    ncols: usize,
+    nrows: usize,
+    pattern: &'a [usize],
+    val: &'a [f64],
+}
+
+impl Node<'_> {
+    /// Column `c` (all `nrows` rows).
+    fn col(&self, c: usize) -> &[f64] {
+        &self.val[c * self.nrows..(c + 1) * self.nrows]
+    }
+
+    fn at(&self, i: usize, j: usize) -> f64 {
+        self.val[j * self.nrows + i]
+    }
+}
+
+impl Supernodes {
+    /// The layout of a supernodal symbolic analysis with a custom ordering.
+    fn of(s: &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>) -> Result<Supernodes, FactorError> {
+        let sn = supernodal(s)?;
+        let nsup = sn.n_supernodes();
+        let mut begin = sn.supernode_begin().to_vec();
+        begin.push(sn.supernode_end().last().copied().unwrap_or(0));
+        let mut row_ptr = Vec::with_capacity(nsup + 1);
+        let mut rows = Vec::new();
+        row_ptr.push(0);
+        for k in 0..nsup {
+            rows.extend_from_slice(sn.supernode(k).pattern());
+            row_ptr.push(rows.len());
+        }
+        let fwd = s.perm().expect("custom ordering").arrays().0.to_vec();
+        Ok(Supernodes {
+            begin,
+            row_ptr,
+            rows,
+            val_ptr: sn.col_ptr_for_val().to_vec(),
+            fwd,
+        })
+    }
+
+    fn n_supernodes(&self) -> usize {
+        self.begin.len() - 1
+    }
+
+    /// Length of the factor's values.
+    pub fn len_val(&self) -> usize {
+        self.val_ptr.last().copied().unwrap_or(0)
+    }
+
+    /// Supernode `s` with the factor's `values`.
+    fn node<'a>(&'a self, s: usize, values: &'a [f64]) -> Node<'a> {
+        let (start, end) = (self.begin[s], self.begin[s + 1]);
+        let pattern = &self.rows[self.row_ptr[s]..self.row_ptr[s + 1]];
+        Node {
+            start,
+            ncols: end - start,
+            nrows: end - start + pattern.len(),
+            pattern,
+            val: &values[self.val_ptr[s]..self.val_ptr[s + 1]],
+        }
+    }
+
+    /// `Err` with what is wrong if this is not the layout of a factor of order `size` with
+    /// `len` values (supernodes that tile `0..size`, value ranges that fit their shapes,
+    /// ascending off-diagonal rows below each supernode, an ordering that is a permutation).
+    pub fn check(&self, size: usize, len: usize) -> Result<(), String> {
+        let nsup = self.begin.len().saturating_sub(1);
+        if self.begin.first() != Some(&0)
+            || self.begin.last() != Some(&size)
+            || self.begin.windows(2).any(|w| w[0] >= w[1])
+        {
+            return Err("supernodes do not tile the columns".into());
+        }
+        if self.row_ptr.len() != nsup + 1
+            || self.val_ptr.len() != nsup + 1
+            || self.row_ptr[0] != 0
+            || self.val_ptr[0] != 0
+            || self.row_ptr[nsup] != self.rows.len()
+            || self.val_ptr[nsup] != len
+        {
+            return Err("supernode pointers".into());
+        }
+        for s in 0..nsup {
+            if self.row_ptr[s] > self.row_ptr[s + 1] {
+                return Err("supernode pointers".into());
+            }
+            let pattern = &self.rows[self.row_ptr[s]..self.row_ptr[s + 1]];
+            let ncols = self.begin[s + 1] - self.begin[s];
+            if self.val_ptr[s + 1].checked_sub(self.val_ptr[s]) != Some((ncols + pattern.len()) * ncols) {
+                return Err("supernode values".into());
+            }
+            if pattern.first().is_some_and(|&r| r < self.begin[s + 1])
+                || pattern.last().is_some_and(|&r| r >= size)
+                || pattern.windows(2).any(|w| w[0] >= w[1])
+            {
+                return Err("supernode rows".into());
+            }
+        }
+        let mut seen = vec![false; size];
+        if self.fwd.len() != size
+            || !self
+                .fwd
+                .iter()
+                .all(|&i| i < size && !std::mem::replace(&mut seen[i], true))
+        {
+            return Err("ordering".into());
+        }
+        Ok(())
+    }
+}
+
 
 /// `Σ a_i b_i` in four interleaved partial sums (which the compiler vectorises).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -643,7 +761,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// factor (`nodes`: per supernode of K its first column, its columns of K, the pattern rows of
 /// K and its values), in place on the permuted columns `x` of length `size` each.
 fn sweep_leading(
-    nodes: &[(usize, usize, usize, faer::sparse::linalg::cholesky::supernodal::SupernodeRef<'_, usize, f64>)],
+    nodes: &[(usize, usize, usize, Node<'_>)],
     x: &mut [f64],
     size: usize,
 ) {
@@ -654,7 +772,7 @@ fn sweep_leading(
     // Forward: L_KK y = b; the off-diagonal rows of a supernode are gathered into `t` and
     // scattered once.
     for (start, wk, kp, node) in nodes {
-        let (v, pat, w) = (node.val(), &node.pattern()[..*kp], node.val().ncols());
+        let (pat, w) = (&node.pattern[..*kp], node.ncols);
         for x in x.chunks_exact_mut(size) {
             // A supernode whose entries are all zero changes nothing (the right-hand sides of
             // recoveries are zero outside the retained DOFs, and so stay most supernodes).
@@ -668,11 +786,7 @@ fn sweep_leading(
                 if xc == 0.0 {
                     continue;
                 }
-                let col = v
-                    .col(c)
-                    .try_as_col_major()
-                    .expect("column-major")
-                    .as_slice();
+                let col = node.col(c);
                 for r in c + 1..*wk {
                     x[start + r] -= col[r] * xc;
                 }
@@ -687,25 +801,20 @@ fn sweep_leading(
     }
     // D.
     for (start, wk, _, node) in nodes {
-        let v = node.val();
         for x in x.chunks_exact_mut(size) {
             for c in 0..*wk {
-                x[start + c] /= v[(c, c)];
+                x[start + c] /= node.at(c, c);
             }
         }
     }
     // Backward: L_KKᵀ x = y; the pattern's values gathered into `t` once.
     for (start, wk, kp, node) in nodes.iter().rev() {
-        let (v, pat, w) = (node.val(), &node.pattern()[..*kp], node.val().ncols());
+        let (pat, w) = (&node.pattern[..*kp], node.ncols);
         for x in x.chunks_exact_mut(size) {
             t.clear();
             t.extend(pat.iter().map(|&row| x[row]));
             for c in (0..*wk).rev() {
-                let col = v
-                    .col(c)
-                    .try_as_col_major()
-                    .expect("column-major")
-                    .as_slice();
+                let col = node.col(c);
                 // Both sums as (vectorised) dot products: the one over the diagonal block
                 // was a chain of dependent scalar updates, most of the sweep's time.
                 let mut acc = x[start + c];
@@ -718,6 +827,33 @@ fn sweep_leading(
 }
 
 impl SaddleFactor {
+    /// The factorisation of a saddle-point matrix with `n` free DOFs and `m` constraint rows
+    /// from its supernodal layout and values (a model-cache hit: no symbolic analysis).
+    pub fn from_layout(
+        layout: std::sync::Arc<Supernodes>,
+        values: SharedValues,
+        n: usize,
+        m: usize,
+    ) -> Result<SaddleFactor, FactorError> {
+        if values.len() != layout.len_val() {
+            return Err(FactorError::FactorLength {
+                len: values.len(),
+                expected: layout.len_val(),
+            });
+        }
+        Ok(SaddleFactor {
+            layout,
+            values,
+            n,
+            m,
+        })
+    }
+
+    /// The supernodal layout (shared, not copied).
+    pub fn layout(&self) -> std::sync::Arc<Supernodes> {
+        self.layout.clone()
+    }
+
     /// The values of the factor (shared, not copied).
     pub fn values(&self) -> SharedValues {
         self.values.clone()
@@ -733,9 +869,11 @@ impl SaddleFactor {
     pub fn solve_block_in_place(&self, b: &mut [f64], ncols: usize) {
         let (n, m) = (self.n, self.m);
         let size = n + m;
-        let sn = supernodal(&self.symbolic).expect("analysed supernodal");
-        let perm = self.symbolic.perm().expect("custom ordering");
-        let (fwd, inv) = perm.arrays();
+        let fwd = &self.layout.fwd;
+        let mut inv = vec![0usize; size];
+        for (new, &old) in fwd.iter().enumerate() {
+            inv[old] = new;
+        }
         // Permuted copy, constraint rows zero (they are never read below).
         let mut x = vec![0.0; size * ncols];
         for j in 0..ncols {
@@ -743,25 +881,14 @@ impl SaddleFactor {
                 x[j * size + i] = b[j * n + fwd[i]];
             }
         }
-        // The supernodal factor is stored like an L Lᵀ one with D on the diagonal of unit-lower
-        // diagonal blocks; read it through the same accessor.
-        let lref = SupernodalLltRef::new(sn, &self.values);
-        let nsup = sn.n_supernodes();
         // Per supernode of K: its first column, the columns of K in it, the pattern rows of K
-        // (the constraint rows come last in every pattern) and a view of its values.
-        let nodes: Vec<_> = (0..nsup)
-            .map(|s| lref.supernode(s))
-            .take_while(|node| node.start() < n)
+        // (the constraint rows come last in every pattern) and its values.
+        let nodes: Vec<_> = (0..self.layout.n_supernodes())
+            .map(|s| self.layout.node(s, &self.values))
+            .take_while(|node| node.start < n)
             .map(|node| {
-                let pat = node.pattern();
-                debug_assert!(pat.windows(2).all(|p| p[0] < p[1]));
-                let kp = pat.partition_point(|&r| r < n);
-                (
-                    node.start(),
-                    (node.val().ncols()).min(n - node.start()),
-                    kp,
-                    node,
-                )
+                let kp = node.pattern.partition_point(|&r| r < n);
+                (node.start, node.ncols.min(n - node.start), kp, node)
             })
             .collect();
         // Each column sees the same operations in the same order whether it is solved alone
@@ -794,14 +921,11 @@ impl SaddleFactor {
     pub fn delassus(&self) -> Option<faer::Mat<f64>> {
         use faer::linalg::matmul::triangular::{BlockStructure, matmul};
         let (n, m) = (self.n, self.m);
-        let sn = supernodal(&self.symbolic).expect("analysed supernodal");
-        let lref = SupernodalLltRef::new(sn, &self.values);
         // L_MM with D_MM on its diagonal.
         let mut l = faer::Mat::<f64>::zeros(m, m);
-        for s in 0..sn.n_supernodes() {
-            let node = lref.supernode(s);
-            let (start, val, pattern) = (node.start(), node.val(), node.pattern());
-            let ncols = val.ncols();
+        for s in 0..self.layout.n_supernodes() {
+            let node = self.layout.node(s, &self.values);
+            let (start, pattern, ncols) = (node.start, node.pattern, node.ncols);
             if start + ncols <= n {
                 continue;
             }
@@ -811,10 +935,10 @@ impl SaddleFactor {
                     continue;
                 }
                 for i in j..ncols {
-                    l[(start + i - n, col - n)] = val[(i, j)];
+                    l[(start + i - n, col - n)] = node.at(i, j);
                 }
                 for (k, &row) in pattern.iter().enumerate() {
-                    l[(row - n, col - n)] = val[(ncols + k, j)];
+                    l[(row - n, col - n)] = node.at(ncols + k, j);
                 }
             }
         }

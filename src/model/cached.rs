@@ -2,19 +2,19 @@
 //! parts of the model rebuilt from it.
 //!
 //! An entry holds, in this order: sizes and scalars (`META`), the fill-reducing ordering of
-//! the free DOFs (the expensive part of the analysis, which is redone from it with faer's
-//! custom ordering), the upper pattern of `K` (so that `K` need not be assembled), the
-//! grounded DOFs and their springs, the forces of the prescribed displacements, and for a
-//! contact model the Delassus operator `W` and the condensed loads `w0` (of the tractions, with
-//! the traction forces they belong to, and of the prescribed displacements); last, the values
-//! of the numeric factor, mapped from the file and checked against its hash in a second thread while
-//! the analysis is redone ([`cache::Reader::map_next`]).
+//! the free DOFs, the grounded DOFs and their springs, the forces of the prescribed
+//! displacements; for a contact model the Delassus operator `W`, the condensed loads `w0` (of
+//! the tractions, with the traction forces they belong to, and of the prescribed
+//! displacements) and the supernodal layout of the factor ([`crate::linsolve::Supernodes`]:
+//! a hit needs no symbolic analysis); without contact the upper pattern of `K`, from which the
+//! analysis is redone with the stored ordering (faer has no way to store it); last, the values
+//! of the numeric factor, mapped from the file and checked against its hash in a second thread
+//! while the layout is checked or the analysis redone ([`cache::Reader::map_next`]).
 
 use crate::assembly::UpperCsc;
 use crate::cache::{self, Entry, Key, Open, Report, Status, Store, Words};
 use crate::condense::{Condensed, Factor};
-use crate::contact::ConstraintRows;
-use crate::linsolve::{PartialSymbolic, SaddleSymbolic};
+use crate::linsolve::{PartialSymbolic, SaddleFactor};
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Instant;
@@ -34,6 +34,11 @@ mod tag {
     pub const W0_PRESCRIBED: u32 = 11;
     /// Always the last section.
     pub const VALUES: u32 = 12;
+    /// The supernodal layout of a contact model's factor ([`crate::linsolve::Supernodes`]).
+    pub const SN_BEGIN: u32 = 13;
+    pub const SN_ROW_PTR: u32 = 14;
+    pub const SN_ROWS: u32 = 15;
+    pub const SN_VAL_PTR: u32 = 16;
 }
 
 /// `META`: kind, n_free, n_interior, n_retained, m, stiffness nonzeros, bits of `krr_scale`.
@@ -104,7 +109,6 @@ pub(super) fn lookup(
     mesh_bytes: &[u8],
     gap: Option<f64>,
     sizes: &Sizes,
-    y: Option<&ConstraintRows>,
     grounded: &[usize],
 ) -> Lookup {
     let key = match cache::model_key(case, mesh_bytes, gap) {
@@ -122,7 +126,7 @@ pub(super) fn lookup(
         Open::Corrupt(why) => why,
         Open::Ready(reader) => {
             let bytes = reader.bytes;
-            match restore(reader, sizes, y, grounded) {
+            match restore(reader, sizes, grounded) {
                 Ok(mut r) => {
                     r.report = Report {
                         status: Status::Hit,
@@ -177,8 +181,6 @@ pub(super) fn entry(b: Built) -> Entry {
     let mut sections = vec![
         (tag::META, Words::U64(meta)),
         (tag::ORDERING, Words::Usize(b.ordering)),
-        (tag::COL_PTR, Words::Usize(b.k.col_ptr)),
-        (tag::ROW_IDX, Words::Usize(b.k.row_idx)),
         (tag::GROUNDED, Words::Usize(b.grounded.to_vec())),
         (
             tag::GROUND_KG,
@@ -196,6 +198,19 @@ pub(super) fn entry(b: Built) -> Entry {
         sections.push((tag::F_TRACTION, Words::F64(b.f_traction.to_vec())));
         sections.push((tag::W0_TRACTION, Words::F64(b.contact_w0[0].clone())));
         sections.push((tag::W0_PRESCRIBED, Words::F64(b.contact_w0[1].clone())));
+    }
+    // The pattern of K for a partial factorisation's analysis (a contact model's factor keeps
+    // its own layout instead).
+    if !s.contact {
+        sections.push((tag::COL_PTR, Words::Usize(b.k.col_ptr)));
+        sections.push((tag::ROW_IDX, Words::Usize(b.k.row_idx)));
+    }
+    if let Factor::Saddle(f) = &b.condensed.chol {
+        let layout = f.layout();
+        sections.push((tag::SN_BEGIN, Words::Usize(layout.begin.clone())));
+        sections.push((tag::SN_ROW_PTR, Words::Usize(layout.row_ptr.clone())));
+        sections.push((tag::SN_ROWS, Words::Usize(layout.rows.clone())));
+        sections.push((tag::SN_VAL_PTR, Words::Usize(layout.val_ptr.clone())));
     }
     sections.push((tag::VALUES, Words::Shared(values)));
     Entry { sections }
@@ -226,7 +241,6 @@ fn is_upper_pattern(col_ptr: &[usize], row_idx: &[usize], n: usize) -> bool {
 fn restore(
     mut reader: cache::Reader,
     sizes: &Sizes,
-    y: Option<&ConstraintRows>,
     grounded: &[usize],
 ) -> Result<Restored, String> {
     let bad = |what: &str| format!("inconsistent ({what})");
@@ -246,9 +260,27 @@ fn restore(
     };
     let meta = take_u(tag::META, "sizes")?;
     let ordering = take_u(tag::ORDERING, "ordering")?;
-    let col_ptr = take_u(tag::COL_PTR, "pattern")?;
-    let row_idx = take_u(tag::ROW_IDX, "pattern")?;
+    let pattern = if sizes.contact {
+        None
+    } else {
+        Some((
+            take_u(tag::COL_PTR, "pattern")?,
+            take_u(tag::ROW_IDX, "pattern")?,
+        ))
+    };
     let stored_grounded = take_u(tag::GROUNDED, "grounded DOFs")?;
+    // A contact model's supernodal layout (its ordering is the stored one, then the rows).
+    let layout = if sizes.contact {
+        Some(crate::linsolve::Supernodes {
+            begin: take_u(tag::SN_BEGIN, "supernodes")?,
+            row_ptr: take_u(tag::SN_ROW_PTR, "supernodes")?,
+            rows: take_u(tag::SN_ROWS, "supernodes")?,
+            val_ptr: take_u(tag::SN_VAL_PTR, "supernodes")?,
+            fwd: Vec::new(),
+        })
+    } else {
+        None
+    };
     let mut take_f = |t: u32, len: usize, what: &str| -> Result<Vec<f64>, String> {
         sec.remove(&t)
             .and_then(Words::into_f64)
@@ -265,7 +297,9 @@ fn restore(
     if stored_grounded != grounded {
         return Err(bad("other grounded DOFs"));
     }
-    if meta[5] != row_idx.len() || !is_upper_pattern(&col_ptr, &row_idx, n) {
+    if let Some((col_ptr, row_idx)) = &pattern
+        && (meta[5] != row_idx.len() || !is_upper_pattern(col_ptr, row_idx, n))
+    {
         return Err(bad("stiffness pattern"));
     }
     let krr_scale = f64::from_bits(meta[6] as u64);
@@ -284,16 +318,27 @@ fn restore(
     if !is_permutation(&ordering, order_len) {
         return Err(bad("ordering"));
     }
-    // The analysis from the stored ordering, while a second thread reads the factor values.
-    let y_free = y.map(|y| y.free(n_i));
+    // A contact model's factor is read with its stored layout (no analysis); a partial
+    // factorisation's analysis is redone from the stored ordering, while a second thread reads
+    // the factor values.
+    let layout = layout.map(|mut l| {
+        l.fwd = ordering.iter().copied().chain(n..n + m).collect();
+        l
+    });
     let (analysis, analyse_s, values) = std::thread::scope(|s| {
         let values = s.spawn(move || reader.map_next());
         let t = Instant::now();
-        let analysis = match &y_free {
-            Some(yf) => SaddleSymbolic::with_ordering(n, &col_ptr, &row_idx, yf, &ordering)
-                .map(Analysis::Saddle),
-            None => PartialSymbolic::with_ordering(n, n_r, &col_ptr, &row_idx, &ordering)
-                .map(Analysis::Partial),
+        let analysis = match layout {
+            Some(l) => l
+                .check(n + m, l.len_val())
+                .map(|()| Analysis::Layout(Arc::new(l)))
+                .map_err(|e| bad(&e)),
+            None => {
+                let (col_ptr, row_idx) = pattern.as_ref().expect("taken without contact");
+                PartialSymbolic::with_ordering(n, n_r, col_ptr, row_idx, &ordering)
+                    .map(Analysis::Partial)
+                    .map_err(|e| format!("unusable: {e}"))
+            }
         };
         let analyse_s = t.elapsed().as_secs_f64();
         let values = values
@@ -303,8 +348,8 @@ fn restore(
     });
     let (_, values) = values?;
     let values = Arc::new(values);
-    let chol = match analysis.map_err(|e| format!("unusable: {e}"))? {
-        Analysis::Saddle(s) => s.from_values(values).map(Factor::Saddle),
+    let chol = match analysis? {
+        Analysis::Layout(l) => SaddleFactor::from_layout(l, values, n, m).map(Factor::Saddle),
         Analysis::Partial(s) => s.from_values(values).map(Factor::Partial),
     }
     .map_err(|e| format!("unusable: {e}"))?;
@@ -318,7 +363,7 @@ fn restore(
         },
         w,
         f_prescribed,
-        stiffness_nonzeros: row_idx.len(),
+        stiffness_nonzeros: meta[5],
         w0,
         analyse_s,
         report: Report::off(None),
@@ -326,6 +371,7 @@ fn restore(
 }
 
 enum Analysis {
-    Saddle(SaddleSymbolic),
+    /// The checked layout of a contact model's factor.
+    Layout(Arc<crate::linsolve::Supernodes>),
     Partial(PartialSymbolic),
 }

@@ -264,7 +264,6 @@ impl Model {
                 bytes,
                 pair.as_ref().map(|p| p.candidate_gap),
                 &sizes,
-                y.as_ref(),
                 &grounded,
             );
         }
