@@ -20,12 +20,42 @@ pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// A fresh, empty temporary directory for one test.
+/// A fresh, empty temporary directory for one test. The first call of a test process also
+/// deletes the directories of earlier test processes that are no longer running (some tests
+/// write hundreds of MB of output, which would otherwise pile up run after run).
 pub fn tempdir(name: &str) -> PathBuf {
+    static STALE: std::sync::Once = std::sync::Once::new();
+    STALE.call_once(remove_stale_tempdirs);
     let d = std::env::temp_dir().join(format!("stickslip-test-{}-{}", name, std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
+}
+
+/// Deletes `stickslip-test-*-PID` (and `stickslip-hostile-PID`) directories whose process is gone (Linux: no `/proc/PID`).
+fn remove_stale_tempdirs() {
+    let proc = std::path::Path::new("/proc");
+    if !proc.join("self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(std::env::temp_dir()) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().to_string();
+        let Some(rest) = name
+            .strip_prefix("stickslip-test-")
+            .or_else(|| name.strip_prefix("stickslip-hostile-"))
+        else {
+            continue;
+        };
+        let Some(pid) = rest.rsplit('-').next().filter(|p| p.parse::<u32>().is_ok()) else {
+            continue;
+        };
+        if !proc.join(pid).exists() {
+            let _ = std::fs::remove_dir_all(e.path());
+        }
+    }
 }
 
 /// Runs the `stickslip` binary with `args`; returns (exit status, -1 without one; stdout;
