@@ -195,7 +195,11 @@ pub fn element_forces(xe: &[[f64; 2]; 6], ue: &[f64; 12], mat: &Material) -> ([f
         } else {
             mat.stress(e)
         };
-        let (a_xx, a_yy) = if mixed { (2.0 * m, m) } else { (l + 2.0 * m, m) };
+        let (a_xx, a_yy) = if mixed {
+            (2.0 * m, m)
+        } else {
+            (l + 2.0 * m, m)
+        };
         for (a, g) in mp.dndx.iter().enumerate() {
             let (ax, ay) = (g[0], g[1]);
             f[2 * a] += s * (ax * sig[0] + ay * sig[2]);
@@ -321,15 +325,25 @@ mod tests {
     fn element_forces_are_k_times_u_and_kmax_the_largest_entry() {
         let xe = curved_element();
         let ue: [f64; 12] = std::array::from_fn(|i| ((i * 37 % 11) as f64 - 5.0) * 1e-3);
-        for mat in [Material { e: 3.0, nu: 0.25 }, Material { e: 2.0, nu: 0.4995 }] {
+        for mat in [
+            Material { e: 3.0, nu: 0.25 },
+            Material { e: 2.0, nu: 0.4995 },
+        ] {
             let k = element_stiffness(&xe, &mat);
             let (f, kmax) = element_forces(&xe, &ue, &mat);
             let kmax_k = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            assert!((kmax - kmax_k).abs() <= 1e-14 * kmax_k, "{kmax} against {kmax_k}");
+            assert!(
+                (kmax - kmax_k).abs() <= 1e-14 * kmax_k,
+                "{kmax} against {kmax_k}"
+            );
             for i in 0..12 {
                 let ku: f64 = (0..12).map(|j| k[i * 12 + j] * ue[j]).sum();
                 let size: f64 = (0..12).map(|j| (k[i * 12 + j] * ue[j]).abs()).sum();
-                assert!((f[i] - ku).abs() <= 1e-13 * size, "row {i}: {} against {ku}", f[i]);
+                assert!(
+                    (f[i] - ku).abs() <= 1e-13 * size,
+                    "row {i}: {} against {ku}",
+                    f[i]
+                );
             }
         }
     }

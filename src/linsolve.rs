@@ -645,7 +645,9 @@ impl Node<'_> {
 
 impl Supernodes {
     /// The layout of a supernodal symbolic analysis with a custom ordering.
-    fn of(s: &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>) -> Result<Supernodes, FactorError> {
+    fn of(
+        s: &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
+    ) -> Result<Supernodes, FactorError> {
         let sn = supernodal(s)?;
         let nsup = sn.n_supernodes();
         let mut begin = sn.supernode_begin().to_vec();
@@ -715,7 +717,9 @@ impl Supernodes {
             }
             let pattern = &self.rows[self.row_ptr[s]..self.row_ptr[s + 1]];
             let ncols = self.begin[s + 1] - self.begin[s];
-            if self.val_ptr[s + 1].checked_sub(self.val_ptr[s]) != Some((ncols + pattern.len()) * ncols) {
+            if self.val_ptr[s + 1].checked_sub(self.val_ptr[s])
+                != Some((ncols + pattern.len()) * ncols)
+            {
                 return Err("supernode values".into());
             }
             if pattern.first().is_some_and(|&r| r < self.begin[s + 1])
@@ -738,7 +742,6 @@ impl Supernodes {
     }
 }
 
-
 /// `Σ a_i b_i` in four interleaved partial sums (which the compiler vectorises).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     let mut acc = [0.0; 4];
@@ -760,11 +763,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// The forward, diagonal and backward sweeps of `K̂ X = B` with the leading block of a saddle
 /// factor (`nodes`: per supernode of K its first column, its columns of K, the pattern rows of
 /// K and its values), in place on the permuted columns `x` of length `size` each.
-fn sweep_leading(
-    nodes: &[(usize, usize, usize, Node<'_>)],
-    x: &mut [f64],
-    size: usize,
-) {
+fn sweep_leading(nodes: &[(usize, usize, usize, Node<'_>)], x: &mut [f64], size: usize) {
     // Each supernode is read once for all the columns (the factor is tens to hundreds of MB
     // and the sweeps are memory-bound); each column sees the same operations in the same
     // order as when it is solved alone.

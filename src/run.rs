@@ -318,7 +318,7 @@ impl<'a> Progress<'a> {
     }
 
     fn step(&self, ev: &StepEvent) {
-        crate::trace::mark(&format!("step {}", ev.step));
+        crate::trace::mark(format_args!("step {}", ev.step));
         let r = ev.record;
         let msg = match (r.pilot, r.contact) {
             (Some(p), Some(c)) => format!(

@@ -20,11 +20,15 @@ pub fn start() {
     origin();
 }
 
-/// Prints `label` with the time since [`start`], if tracing is on.
-pub fn mark(label: &str) {
+/// Prints `label` with the time since [`start`], if tracing is on (`label` may be
+/// `format_args!(…)`, formatted only then).
+pub fn mark(label: impl std::fmt::Display) {
     if let Some(t0) = origin() {
         let ms = t0.elapsed().as_secs_f64() * 1e3;
         let thread = std::thread::current();
-        eprintln!("trace {ms:9.1} ms [{}] {label}", thread.name().unwrap_or("-"));
+        eprintln!(
+            "trace {ms:9.1} ms [{}] {label}",
+            thread.name().unwrap_or("-")
+        );
     }
 }

@@ -185,6 +185,10 @@ fn sweep_rows_are_bit_for_bit_the_single_runs_of_their_laws() {
         assert_eq!(row["checks"], s["checks"], "law {k}");
         assert_eq!(row["newton_iterations"], s["newton_iterations"], "law {k}");
         assert_eq!(row["lu_factorisations"], s["lu_factorisations"], "law {k}");
-        assert!(s["lu_factorisations"].as_u64().unwrap() >= 2, "law {k}: {}", s["lu_factorisations"]);
+        assert!(
+            s["lu_factorisations"].as_u64().unwrap() >= 2,
+            "law {k}: {}",
+            s["lu_factorisations"]
+        );
     }
 }

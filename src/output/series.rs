@@ -7,11 +7,12 @@
 //! the files, in exactly the order, that writing in the loop would, so a run's files do not
 //! depend on it. When it falls behind it takes the queued steps together: their displacement
 //! fields come from one block solve (which reads the factor once for all, and gives each field
-//! bit for bit), and their bodies datasets are encoded in parallel. Its first error stops it;
+//! bit for bit), and their point fields (stresses) are computed in parallel; each array goes to
+//! the file from its own memory. Its first error stops it;
 //! the driver sees that error at its next step, and stops.
 
-use super::vtu::Field;
 use super::fields::{BodiesMesh, bodies_fields, bodies_vtu, contact_csv, contact_vtu};
+use super::vtu::Field;
 use super::{PvdEntry, pvd};
 use crate::contact::solver::State;
 use crate::error::RunError;
@@ -102,7 +103,11 @@ impl<'a> Series<'a> {
     pub fn write(&mut self, steps: Vec<StepOutput>) -> Result<(), RunError> {
         use rayon::prelude::*;
         let t = Instant::now();
-        crate::trace::mark(&format!("write batch of {} from step {}", steps.len(), steps[0].step));
+        crate::trace::mark(format_args!(
+            "write batch of {} from step {}",
+            steps.len(),
+            steps[0].step
+        ));
         let model = self.model;
         // The fields recovered from contact states: one block solve for the batch.
         let states: Vec<(f64, &State)> = steps
@@ -131,10 +136,8 @@ impl<'a> Series<'a> {
             }
         }
         crate::trace::mark("fields recovered");
-        let point_data: Vec<Vec<Field>> = fields
-            .par_iter()
-            .map(|u| bodies_fields(model, u))
-            .collect();
+        let point_data: Vec<Vec<Field>> =
+            fields.par_iter().map(|u| bodies_fields(model, u)).collect();
         crate::trace::mark("point fields");
         // Taken out while the files are written, which borrows `self`.
         let mesh = self.mesh.take().unwrap_or_else(|| BodiesMesh::new(model));

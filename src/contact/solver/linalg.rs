@@ -138,8 +138,12 @@ impl Block {
 /// factorises those itself.
 #[derive(Default)]
 pub struct BlockStore {
-    blocks: std::sync::Mutex<(usize, std::collections::HashMap<Vec<usize>, Arc<BlockSlot>>)>,
+    /// The bytes of the blocks taken in, and the blocks by their unknowns.
+    blocks: std::sync::Mutex<(usize, BlockMap)>,
 }
+
+/// The blocks of a [`BlockStore`] by their unknowns.
+type BlockMap = std::collections::HashMap<Vec<usize>, Arc<BlockSlot>>;
 
 /// One block of a [`BlockStore`]: factorised once (`None`: singular).
 type BlockSlot = std::sync::OnceLock<Option<Arc<Block>>>;
