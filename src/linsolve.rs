@@ -980,8 +980,11 @@ impl SaddleFactor {
 mod tests {
     use super::*;
 
-    /// A tridiagonal K̂ of order `n` (upper CSC) and two constraint rows.
-    fn small_saddle(n: usize) -> (Vec<usize>, Vec<usize>, Vec<f64>, Vec<Vec<(usize, f64)>>) {
+    /// Constraint rows: (free-DOF index, coefficient) per row.
+    type Rows = Vec<Vec<(usize, f64)>>;
+
+    /// A tridiagonal K̂ of order `n` (upper CSC pattern and values) and two constraint rows.
+    fn small_saddle(n: usize) -> (Vec<usize>, Vec<usize>, Vec<f64>, Rows) {
         let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
         for j in 0..n {
             if j > 0 {
