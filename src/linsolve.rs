@@ -691,11 +691,13 @@ impl Supernodes {
         }
     }
 
-    /// `Err` with what is wrong if this is not the layout of a factor of order `size`
-    /// (supernodes that tile `0..size`, value ranges that fit their shapes, ascending
-    /// off-diagonal rows below each supernode, an ordering that is a permutation); the length
-    /// of the values is checked against [`Self::len_val`] by [`SaddleFactor::from_layout`].
-    pub fn check(&self, size: usize) -> Result<(), String> {
+    /// `Err` with what is wrong if this is not the layout of a saddle factor with `n` free DOFs
+    /// and `m` constraint rows (supernodes that tile `0..n + m`, value ranges that fit their
+    /// shapes, ascending off-diagonal rows below each supernode, an ordering that is a
+    /// permutation with the free DOFs first); the length of the values is checked against
+    /// [`Self::len_val`] by [`SaddleFactor::from_layout`], whose layout must pass this.
+    pub fn check(&self, n: usize, m: usize) -> Result<(), String> {
+        let size = n + m;
         let nsup = self.begin.len().saturating_sub(1);
         if self.begin.first() != Some(&0)
             || self.begin.last() != Some(&size)
@@ -712,10 +714,10 @@ impl Supernodes {
             return Err("supernode pointers".into());
         }
         for s in 0..nsup {
-            if self.row_ptr[s] > self.row_ptr[s + 1] {
-                return Err("supernode pointers".into());
-            }
-            let pattern = &self.rows[self.row_ptr[s]..self.row_ptr[s + 1]];
+            let pattern = self
+                .rows
+                .get(self.row_ptr[s]..self.row_ptr[s + 1])
+                .ok_or("supernode pointers")?;
             let ncols = self.begin[s + 1] - self.begin[s];
             if self.val_ptr[s + 1].checked_sub(self.val_ptr[s])
                 != Some((ncols + pattern.len()) * ncols)
@@ -731,10 +733,9 @@ impl Supernodes {
         }
         let mut seen = vec![false; size];
         if self.fwd.len() != size
-            || !self
-                .fwd
-                .iter()
-                .all(|&i| i < size && !std::mem::replace(&mut seen[i], true))
+            || !self.fwd.iter().enumerate().all(|(k, &i)| {
+                (i < n) == (k < n) && i < size && !std::mem::replace(&mut seen[i], true)
+            })
         {
             return Err("ordering".into());
         }
@@ -868,6 +869,9 @@ impl SaddleFactor {
     pub fn solve_block_in_place(&self, b: &mut [f64], ncols: usize) {
         let (n, m) = (self.n, self.m);
         let size = n + m;
+        if n == 0 || ncols == 0 {
+            return;
+        }
         let fwd = &self.layout.fwd;
         let mut inv = vec![0usize; size];
         for (new, &old) in fwd.iter().enumerate() {
@@ -1006,8 +1010,7 @@ mod tests {
         let sym = SaddleSymbolic::analyse(n, &cp, &ri, &y).unwrap();
         let f = sym.factorise(&kv, &y).unwrap();
         let layout = f.layout();
-        let size = n + y.len();
-        assert_eq!(layout.check(size), Ok(()));
+        assert_eq!(layout.check(n, y.len()), Ok(()));
         // K̂ x = b through the layout, against the tridiagonal product.
         let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
         let mut x = b.clone();
@@ -1033,10 +1036,14 @@ mod tests {
         let broken = |edit: &dyn Fn(&mut Supernodes)| {
             let mut l = (*layout).clone();
             edit(&mut l);
-            l.check(size)
+            l.check(n, y.len())
         };
         assert!(broken(&|l| *l.begin.last_mut().unwrap() -= 1).is_err());
         assert!(broken(&|l| l.fwd[0] = l.fwd[1]).is_err());
+        // A constraint row among the free DOFs.
+        assert!(broken(&|l| l.fwd.swap(0, n)).is_err());
+        // Row pointers that go back (and past the rows).
+        assert!(broken(&|l| l.row_ptr[1] = l.rows.len() + 7).is_err());
         assert!(broken(&|l| *l.val_ptr.last_mut().unwrap() += 1).is_err());
         let with_rows = (0..layout.begin.len() - 1)
             .find(|&s| layout.row_ptr[s + 1] - layout.row_ptr[s] >= 2)

@@ -330,7 +330,7 @@ fn restore(
         let t = Instant::now();
         let analysis = match layout {
             Some(l) => l
-                .check(n + m)
+                .check(n, m)
                 .map(|()| Analysis::Layout(Arc::new(l)))
                 .map_err(|e| bad(&e)),
             None => {

@@ -106,7 +106,7 @@ impl<'a> Series<'a> {
         crate::trace::mark(format_args!(
             "write batch of {} from step {}",
             steps.len(),
-            steps[0].step
+            steps.first().map_or(0, |s| s.step)
         ));
         let model = self.model;
         // The fields recovered from contact states: one block solve for the batch.

@@ -21,8 +21,9 @@ pub fn repo() -> PathBuf {
 }
 
 /// A fresh, empty temporary directory for one test. The first call of a test process also
-/// deletes the directories of earlier test processes that are no longer running (some tests
-/// write hundreds of MB of output, which would otherwise pile up run after run).
+/// deletes the directories that earlier test processes, no longer running, left over an hour
+/// ago (some tests write hundreds of MB of output, which would otherwise pile up run after
+/// run).
 pub fn tempdir(name: &str) -> PathBuf {
     static STALE: std::sync::Once = std::sync::Once::new();
     STALE.call_once(remove_stale_tempdirs);
@@ -32,7 +33,10 @@ pub fn tempdir(name: &str) -> PathBuf {
     d
 }
 
-/// Deletes `stickslip-test-*-PID` (and `stickslip-hostile-PID`) directories whose process is gone (Linux: no `/proc/PID`).
+/// Deletes `stickslip-test-*-PID` directories whose process is gone (Linux: no `/proc/PID`)
+/// and that are more than an hour old (a process of another PID namespace sharing the
+/// temporary directory is not in `/proc`). The fuzz reproducers of `tests/hostile.rs`
+/// (`stickslip-hostile-PID`) are kept.
 fn remove_stale_tempdirs() {
     let proc = std::path::Path::new("/proc");
     if !proc.join("self").exists() {
@@ -43,16 +47,19 @@ fn remove_stale_tempdirs() {
     };
     for e in entries.flatten() {
         let name = e.file_name().to_string_lossy().to_string();
-        let Some(rest) = name
-            .strip_prefix("stickslip-test-")
-            .or_else(|| name.strip_prefix("stickslip-hostile-"))
-        else {
+        let Some(rest) = name.strip_prefix("stickslip-test-") else {
             continue;
         };
         let Some(pid) = rest.rsplit('-').next().filter(|p| p.parse::<u32>().is_ok()) else {
             continue;
         };
-        if !proc.join(pid).exists() {
+        let old = e
+            .metadata()
+            .and_then(|m| m.modified())
+            .ok()
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|age| age.as_secs() > 3600);
+        if old && !proc.join(pid).exists() {
             let _ = std::fs::remove_dir_all(e.path());
         }
     }

@@ -106,6 +106,10 @@ pub struct Block {
 impl Block {
     /// Factorises `W[unk, unk]`; `None` if it is singular or not numerically positive definite.
     fn factorise(w: &Mat<f64>, unk: &[usize]) -> Option<Block> {
+        // Sequential (faer's global parallelism is set so at every model build): a rayon
+        // worker waiting inside a parallel factorisation could otherwise take up another row
+        // that waits on this very block in [`BlockStore::get`].
+        debug_assert!(matches!(faer::get_global_parallelism(), faer::Par::Seq));
         let k = Mat::from_fn(unk.len(), unk.len(), |i, j| w[(unk[i], unk[j])]);
         let llt = k.llt(faer::Side::Lower).ok()?;
         // The pivots are L_ii²: as for an LU, singular when the smallest is below 1e-12 of the
