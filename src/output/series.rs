@@ -25,10 +25,7 @@ use std::time::Instant;
 
 /// Writes `bytes` to `path` atomically, the error naming the file.
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
-    super::write_atomic(path, bytes).map_err(|source| RunError::Write {
-        path: path.display().to_string(),
-        source,
-    })
+    write_parts(path, &[bytes])
 }
 
 /// Writes the byte strings `parts` to `path` atomically, the error naming the file.
