@@ -434,6 +434,7 @@ impl SaddleSymbolic {
                 crate::ordering::nested_dissection(n, col_ptr, row_idx)
             }
         };
+        crate::trace::mark("ordered");
         Self::with_ordering(n, col_ptr, row_idx, y_rows, &fwd)
     }
 
@@ -483,6 +484,7 @@ impl SaddleSymbolic {
                 n: size,
             },
         })?;
+        crate::trace::mark("symbolic");
         let layout = std::sync::Arc::new(Supernodes::of(&inner)?);
         Ok(SaddleSymbolic {
             inner: std::sync::Arc::new(inner),

@@ -42,6 +42,7 @@ fn options(method: Method) -> Options {
         tolerance: 1e-12,
         verbose: false,
         history: Default::default(),
+        normal_first: true,
     }
 }
 

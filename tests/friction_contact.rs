@@ -703,6 +703,92 @@ fn fig2_on_l1() -> (stickslip::model::Model, stickslip::contact::solver::Options
         tolerance: 1e-12,
         verbose: false,
         history: Default::default(),
+        normal_first: true,
     };
     (model, opt)
+}
+
+/// A frictional first contact (every node open before the step) starts from the frictionless
+/// contact set, so that the Delassus block it factorises has the unknowns of the contact,
+/// not of every candidate. The step's answer must not depend on that start: Fig. 2's normal
+/// load on L4 (m ≥ 512 contact unknowns, where the start is taken), identical bodies and a
+/// dissimilar pair (β ≠ 0, whose normal load slips the edges), each solved from both starts.
+#[test]
+fn first_contact_from_the_frictionless_set_gives_the_same_step() {
+    use stickslip::case::Control;
+    use stickslip::contact::solver::LuCache;
+    use stickslip::friction::FrictionLaw;
+    use stickslip::model::StepLoad;
+    let law = FrictionLaw::ramp(0.15, 0.1, 2.9e-4).unwrap();
+    for (name, lower, upper) in [
+        ("identical", (200.0, 0.3), (200.0, 0.3)),
+        ("steel on copper", (207.0, 0.3), (110.0, 0.34)),
+    ] {
+        let mut v = shipped_case_on("fig2.json", "vm272_L4.msh");
+        v["bodies"][0]["E"] = json!(lower.0);
+        v["bodies"][0]["nu"] = json!(lower.1);
+        v["bodies"][1]["E"] = json!(upper.0);
+        v["bodies"][1]["nu"] = json!(upper.1);
+        let case: stickslip::case::Case = serde_json::from_value(v).unwrap();
+        let model =
+            stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap();
+        let (_, mut opt) = fig2_on_l1();
+        // 1e-12 floors in the dense solve of the dissimilar pair (updates ≈ 3e-11).
+        opt.tolerance = 1e-10;
+        let cm = model.contact.as_ref().unwrap();
+        let st0 = cm.system.initial_state();
+        let mut solve = |normal_first: bool| {
+            opt.normal_first = normal_first;
+            let mut cache = LuCache::default();
+            let out = model
+                .solve_contact_step(
+                    StepLoad {
+                        scale: 0.0,
+                        control: [Control::Force(0.0), Control::Force(-10.0)],
+                    },
+                    &st0,
+                    None,
+                    &opt,
+                    Some(&law),
+                    Some(&mut cache),
+                )
+                .unwrap();
+            (out, cache.largest_block)
+        };
+        let (a, block_a) = solve(true);
+        let (b, block_b) = solve(false);
+        let (sa, sb) = (&a.state, &b.state);
+        let in_contact = sa
+            .status
+            .iter()
+            .filter(|s| **s != stickslip::contact::solver::Status::Open)
+            .count();
+        let slipping = sa
+            .status
+            .iter()
+            .filter(|s| **s == stickslip::contact::solver::Status::Slip)
+            .count();
+        let scale = sb.f_n.iter().fold(0.0f64, |m, f| m.max(f.abs()));
+        let dev = sa
+            .f_n
+            .iter()
+            .zip(&sb.f_n)
+            .chain(sa.f_t.iter().zip(&sb.f_t))
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0f64, f64::max)
+            / scale;
+        let du = (0..2)
+            .map(|k| (sa.pilot_u[k] - sb.pilot_u[k]).abs() / sb.pilot_u[1].abs())
+            .fold(0.0f64, f64::max);
+        println!(
+            "{name}: {} candidates, {in_contact} in contact ({slipping} slip); largest block {block_a} from the frictionless set, {block_b} from the closest nodes; iterations {} and {}; forces differ by {dev:.1e}, pilot displacement by {du:.1e}",
+            cm.system.ns, a.iterations, b.iterations
+        );
+        assert_eq!(sa.status, sb.status, "{name}: the sets differ");
+        assert!(dev < 1e-9 && du < 1e-9, "{name}: {dev:.2e}, {du:.2e}");
+        // The start was taken: the block has the contact's unknowns (normal and tangential
+        // force of each node in contact, the pilot's two), not every candidate's.
+        assert_eq!(block_a, 2 * in_contact + 2, "{name}");
+        assert!(block_b > block_a, "{name}: {block_b} vs {block_a}");
+    }
 }

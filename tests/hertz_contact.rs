@@ -44,6 +44,7 @@ fn solve_model(model: &Model, load: f64, method: Method, kappa: f64) -> Solution
         tolerance: 1e-10,
         verbose: false,
         history: Default::default(),
+        normal_first: true,
     };
     let prev = cm.system.initial_state();
     let out = model

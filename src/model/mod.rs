@@ -305,7 +305,9 @@ impl Model {
                 other => {
                     let t = Instant::now();
                     let mut k = UpperCsc::pattern(&mesh, &elems, &dofs);
+                    crate::trace::mark("pattern");
                     let f_prescribed = assembly::assemble_stiffness(&mesh, &elems, &dofs, &mut k);
+                    crate::trace::mark("assembled");
                     timings.assemble = t.elapsed().as_secs_f64() + t_traction;
                     let (condensed, contact, ordering) =
                         factorise(&k, &dofs, &grounded, pair.zip(y), e_star, timings)?;
@@ -475,6 +477,7 @@ fn factorise(
     let t = Instant::now();
     let condensed = Condensed::build_saddle(k, n_i, grounded, &y_free, &symbolic)?;
     timings.factorise = t.elapsed().as_secs_f64();
+    crate::trace::mark("numeric factor");
     let t = Instant::now();
     let contact = crate::contact::ContactModel::new(
         pair,

@@ -71,6 +71,8 @@ pub struct LuCache {
     /// the run summary).
     pub factorisations: usize,
     pub gmres_iterations: usize,
+    /// Unknowns of the largest Delassus block factorised so far.
+    pub largest_block: usize,
     /// Seconds spent in each part of the structured solve (for the run summary).
     pub timings: SolveTimings,
     /// Solve every system directly (no start from the step's last direct solve): set by
@@ -592,6 +594,7 @@ impl LuCache {
     /// numerically positive definite.
     fn factorise_block(&mut self, w: &Mat<f64>, unk: &[usize]) -> Option<()> {
         self.factorisations += 1;
+        self.largest_block = self.largest_block.max(unk.len());
         self.forget_block();
         let block = match &self.shared {
             Some(store) => store.get(w, unk),

@@ -182,6 +182,10 @@ pub struct Options {
     pub verbose: bool,
     /// Which slip μ is a function of.
     pub history: crate::friction::History,
+    /// Start a frictional first contact from the frictionless contact set (see
+    /// [`ContactSystem::solve_step`]); off, it starts from the closest nodes stuck, as before
+    /// (kept for the comparison in `tests/friction_contact.rs`).
+    pub normal_first: bool,
 }
 
 /// Result of one step solve.
