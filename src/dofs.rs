@@ -181,6 +181,13 @@ impl DofMap {
         std::array::from_fn(|i| self.node[nodes[i / 2]][i % 2])
     }
 
+    /// The element vector `(ux, uy)` of each of a 6-node triangle's `nodes` from the free
+    /// solution `u`.
+    pub fn element_displacement(&self, nodes: &[usize; 6], u: &[f64]) -> [f64; 12] {
+        let d = nodes.map(|n| self.displacement(n, u));
+        std::array::from_fn(|i| d[i / 2][i % 2])
+    }
+
     /// Nodal displacement (ux, uy) from the free solution `u`.
     pub fn displacement(&self, n: usize, u: &[f64]) -> [f64; 2] {
         self.node[n].map(|d| match d {

@@ -71,7 +71,7 @@ pub fn stress_at(
 ) -> Option<[f64; 4]> {
     let (e, mat, r) = locate(mesh, elems, x)?;
     let nodes = &mesh.triangles[e].nodes;
-    let ue: [f64; 12] = std::array::from_fn(|i| dofs.displacement(nodes[i / 2], u)[i % 2]);
+    let ue: [f64; 12] = dofs.element_displacement(nodes, u);
     let xe = mesh.tri_coords(e);
     let mp = tri6::map_point(&xe, r[0], r[1]);
     Some(elasticity::stress_at_point(&xe, &mp, &ue, &mat))

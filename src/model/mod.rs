@@ -419,7 +419,7 @@ impl Model {
             .map(|(e, mat)| {
                 let nodes = &self.mesh.triangles[*e].nodes;
                 let ue: [f64; 12] =
-                    std::array::from_fn(|i| self.dofs.displacement(nodes[i / 2], u)[i % 2]);
+                    self.dofs.element_displacement(nodes, u);
                 elasticity::nodal_stress(&self.mesh.tri_coords(*e), &ue, mat)
             })
             .collect();
