@@ -247,8 +247,13 @@ impl ContactSystem {
                     if opt.method != Method::AugmentedLagrangian
                         || self.penetration(&y, &status) <= opt.tolerance
                     {
+                        // With the shortcuts, `y` as the iteration tested it; else `W μ`
+                        // again: on the rows of the system `y` is what they impose, off the
+                        // product by the solve's error, which near a force-controlled peak
+                        // was enough to move the bracketed Q_max (L3, `tests/sweep.rs`).
+                        let y = if exact { self.y(w0, &mu) } else { y };
                         return Ok(self.finish(
-                            w0,
+                            &y,
                             &mu,
                             &status,
                             law,
@@ -411,9 +416,10 @@ impl ContactSystem {
     }
 
     #[allow(clippy::too_many_arguments)]
+    /// The converged state at the forces `mu`, with `y = w0 + W μ` at them.
     fn finish(
         &self,
-        w0: &[f64],
+        y: &[f64],
         mu: &[f64],
         status: &[Status],
         law: Option<&FrictionLaw>,
@@ -422,7 +428,6 @@ impl ContactSystem {
         history: History,
     ) -> StepOutcome {
         let ns = self.ns;
-        let y = self.y(w0, mu);
         let mut st = prev.clone();
         let omega = self.slip_weights(prev);
         st.mean_slip = prev.mean_slip
