@@ -23,7 +23,9 @@
 //!   factorisations of the Delassus block, the columns `K⁻¹ e_q` of slip rows, direct solves,
 //!   the capacitance systems and products with `W`), with its iterations and factorisations;
 //! * the ratios: wall / floor of the shipped case on L5 (floor = assemble + analyse +
-//!   factorise), warm / cold wall on L5, wall / floor on L7, factorise L7 / L5.
+//!   factorise as they ran: `build_span` of the summary, since the assembly runs alongside
+//!   the analysis; the ratio to the three phases summed is printed too), warm / cold wall on
+//!   L5, wall / floor on L7, factorise L7 / L5.
 //!
 //! Run: `cargo bench --bench scaling`. Environment: `STICKSLIP_THREADS` (default 2),
 //! `SCALING_LEVELS` (default `0-7`, or a list `4,5,7`), `SCALING_FIT` (default `3-7`),
@@ -113,6 +115,9 @@ struct Row {
     dofs: f64,
     constraints: f64,
     phases: Vec<f64>,
+    /// `build_span` of the summary: the wall time from the start of the assembly to the end
+    /// of the factorisation (the assembly runs alongside the analysis), 0 if not reported.
+    span: f64,
     contact: f64,
     wall: f64,
     warm: Option<f64>,
@@ -200,6 +205,7 @@ fn main() {
                 .iter()
                 .map(|p| t[*p].as_f64().unwrap_or(0.0))
                 .collect(),
+            span: t["build_span"].as_f64().unwrap_or(0.0),
             contact: s["contact_solve_s"].as_f64().unwrap_or(0.0),
             wall,
             warm,
@@ -224,18 +230,22 @@ fn main() {
     md += &format!(
         "Fig. 2 (`cases/fig2.json` as shipped, VTU every 10th step), {threads} threads. Times in s.\n\n"
     );
-    md += "| L | DOFs | constraint rows | read | assemble | analyse | factorise | condense | solve | contact Newton | write | write wait | wall | floor | wall / floor | warm wall | warm / cold | peak MiB | KiB per DOF | status |\n";
-    md += &format!("|{}\n", "---|".repeat(21));
+    md += "| L | DOFs | constraint rows | read | assemble | analyse | factorise | condense | solve | contact Newton | write | write wait | wall | floor | floor phases summed | wall / floor | warm wall | warm / cold | peak MiB | KiB per DOF | status |\n";
+    md += &format!("|{}\n", "---|".repeat(22));
     let mut csv = String::from(
-        "level,dofs,constraints,read,assemble,analyse,factorise,condense,solve,write,write_wait,contact_newton,wall,warm_wall,peak_mib,status\n",
+        "level,dofs,constraints,read,assemble,analyse,factorise,condense,solve,write,write_wait,contact_newton,wall,warm_wall,peak_mib,status,build_span\n",
     );
-    let floor = |r: &Row| r.phases[1] + r.phases[2] + r.phases[3];
+    // The floor: the wall time the assembly, analysis and factorisation took together. The
+    // assembly overlaps the analysis, so the sum of the three phases counts the overlap
+    // twice; the floor is their span as the run reports it (the sum where it does not).
+    let sum = |r: &Row| r.phases[1] + r.phases[2] + r.phases[3];
+    let floor = |r: &Row| if r.span > 0.0 { r.span } else { sum(r) };
     for r in &rows {
         let p = &r.phases;
         let warm = r.warm.map_or("—".into(), |w| format!("{w:.2}"));
         let ratio = r.warm.map_or("—".into(), |w| format!("{:.2}", w / r.wall));
         md += &format!(
-            "| {} | {:.0} | {:.0} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {} | {} | {:.0} | {:.2} | {} |\n",
+            "| {} | {:.0} | {:.0} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {:.0} | {:.2} | {} |\n",
             r.level,
             r.dofs,
             r.constraints,
@@ -250,6 +260,7 @@ fn main() {
             p[7],
             r.wall,
             floor(r),
+            sum(r),
             r.wall / floor(r),
             warm,
             ratio,
@@ -258,7 +269,7 @@ fn main() {
             r.status
         );
         csv += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             r.level,
             r.dofs,
             r.constraints,
@@ -274,7 +285,8 @@ fn main() {
             r.wall,
             r.warm.map_or(String::new(), |w| w.to_string()),
             r.peak,
-            r.status
+            r.status,
+            r.span
         );
     }
     md += "\nThe contact Newton's parts (s): Cholesky factorisations of the Delassus block `K`, the columns `K⁻¹ e_q` of the rows that differ from `K`, direct solves with the factor, the capacitance systems (Woodbury) and products with `W` for rows outside the system; `other` is the rest (the sets, the equations, the driver's work in the contact solve).\n\n| L | contact rows | Newton iterations | factorisations | contact Newton | factorise | columns | direct | woodbury | products | other |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -330,10 +342,12 @@ fn main() {
     md += "\nThe issue's ratios (same run):\n\n";
     if let Some(r5) = at(5) {
         md += &format!(
-            "* Fig. 2 on L5: process wall / (assemble + analyse + factorise) = {:.2} / {:.2} = **{:.2}** (target ≤ 1.3)\n",
+            "* Fig. 2 on L5: process wall / floor (assemble + analyse + factorise, as they ran: the assembly alongside the analysis) = {:.2} / {:.2} = **{:.2}** (target ≤ 1.3); against the three phases summed ({:.2}): {:.2}\n",
             r5.wall,
             floor(r5),
-            r5.wall / floor(r5)
+            r5.wall / floor(r5),
+            sum(r5),
+            r5.wall / sum(r5)
         );
         if let Some(w) = r5.warm {
             md += &format!(
@@ -346,10 +360,12 @@ fn main() {
     }
     if let Some(r7) = at(7) {
         md += &format!(
-            "* Fig. 2 on L7: process wall / floor = {:.2} / {:.2} = **{:.2}** (target ≤ 1.5)\n",
+            "* Fig. 2 on L7: process wall / floor = {:.2} / {:.2} = **{:.2}** (target ≤ 1.5); against the three phases summed ({:.2}): {:.2}\n",
             r7.wall,
             floor(r7),
-            r7.wall / floor(r7)
+            r7.wall / floor(r7),
+            sum(r7),
+            r7.wall / sum(r7)
         );
         if let Some(r5) = at(5) {
             md += &format!(

@@ -122,18 +122,32 @@ pub fn assemble_stiffness(
     dofs: &DofMap,
     k: &mut UpperCsc,
 ) -> Vec<f64> {
+    let mut values = std::mem::take(&mut k.values);
+    let f = assemble_values(mesh, elems, dofs, (&k.col_ptr, &k.row_idx), &mut values);
+    k.values = values;
+    f
+}
+
+/// [`assemble_stiffness`] into the `values` of the pattern `(col_ptr, row_idx)` (of
+/// [`UpperCsc::pattern`]), which another thread may read meanwhile (the analysis).
+pub fn assemble_values(
+    mesh: &Mesh,
+    elems: &[(usize, Material)],
+    dofs: &DofMap,
+    (col_ptr, row_idx): (&[usize], &[usize]),
+    values: &mut [f64],
+) -> Vec<f64> {
     let kes: Vec<[f64; 144]> = elems
         .par_iter()
         .map(|(e, mat)| elasticity::element_stiffness(&mesh.tri_coords(*e), mat))
         .collect();
-    k.values.iter_mut().for_each(|v| *v = 0.0);
+    values.iter_mut().for_each(|v| *v = 0.0);
     let n = dofs.n_free();
     let mut f = vec![0.0; n];
     // The scatter in parallel: each thread owns a range of columns of K (about equal numbers of
     // nonzeros) and the same range of rows of f, and goes through all elements in order adding
     // only to what it owns, so every entry receives its terms in element order, as a serial
     // scatter adds them, whatever the number of threads.
-    let (col_ptr, row_idx) = (&k.col_ptr, &k.row_idx);
     let nnz = col_ptr[n];
     let parts = rayon::current_num_threads().clamp(1, n.max(1));
     // Non-decreasing, from 0 to n (every column and row in one range).
@@ -145,18 +159,18 @@ pub fn assemble_stiffness(
                 .min(n),
         })
         .collect();
-    let mut values: Vec<&mut [f64]> = Vec::with_capacity(parts);
+    let mut owned: Vec<&mut [f64]> = Vec::with_capacity(parts);
     let mut forces: Vec<&mut [f64]> = Vec::with_capacity(parts);
-    let (mut v_rest, mut f_rest) = (&mut k.values[..], &mut f[..]);
+    let (mut v_rest, mut f_rest) = (&mut values[..], &mut f[..]);
     for t in 0..parts {
         let (lo, hi) = (bounds[t], bounds[t + 1]);
         let (v, vr) = v_rest.split_at_mut(col_ptr[hi] - col_ptr[lo]);
         let (fp, fr) = f_rest.split_at_mut(hi - lo);
-        values.push(v);
+        owned.push(v);
         forces.push(fp);
         (v_rest, f_rest) = (vr, fr);
     }
-    values
+    owned
         .into_par_iter()
         .zip(forces)
         .enumerate()

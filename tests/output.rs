@@ -54,21 +54,33 @@ fn vtu_holds_every_documented_array_with_finite_values() {
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "completed");
-    // Every phase is reported, and the phases (disjoint parts of the run) add up to no more
-    // than the process took from the outside: a phase counted twice would exceed it. The
-    // writer's busy time `write` overlaps the solve (it writes on a thread of its own): what it
-    // adds to the run is the time waited for it, `write_wait`.
+    // Every phase is reported, and the disjoint parts of the run add up to no more than the
+    // process took from the outside: a phase counted twice would exceed it. The writer's busy
+    // time `write` overlaps the solve (it writes on a thread of its own): what it adds to the
+    // run is the time waited for it, `write_wait`. The assembly overlaps the analysis: what
+    // the two and the factorisation took together is `build_span`, at most their sum and at
+    // least the factorisation after the longer of the two.
     let write = summary["timings_s"]["write"].as_f64();
     assert!(
         write.is_some_and(|v| v.is_finite() && v > 0.0),
         "write: {write:?}"
     );
+    let t = |k: &str| {
+        let v = summary["timings_s"][k].as_f64();
+        assert!(v.is_some_and(|v| v.is_finite() && v >= 0.0), "{k}: {v:?}");
+        v.unwrap()
+    };
+    let (span, assemble, analyse, factorise) =
+        (t("build_span"), t("assemble"), t("analyse"), t("factorise"));
+    assert!(
+        span <= assemble + analyse + factorise + 1e-6
+            && span >= assemble.max(analyse) + factorise - 1e-6,
+        "build_span {span} against assemble {assemble}, analyse {analyse}, factorise {factorise}"
+    );
     let phases = [
         "read",
         "pair",
-        "assemble",
-        "analyse",
-        "factorise",
+        "build_span",
         "condense",
         "solve",
         "write_wait",

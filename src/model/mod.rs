@@ -54,6 +54,10 @@ pub struct Timings {
     pub analyse: f64,
     /// Numeric Cholesky factorisation.
     pub factorise: f64,
+    /// Wall time from the start of the assembly to the end of the numeric factorisation
+    /// (zero on a model-cache hit): the values are assembled alongside the analysis, so this
+    /// is less than `assemble + analyse + factorise`.
+    pub build_span: f64,
     pub condense: f64,
     pub solve: f64,
     /// The output writer's busy time: it writes on a thread of its own, while the next steps
@@ -303,14 +307,42 @@ impl Model {
                     )
                 }
                 other => {
-                    let t = Instant::now();
+                    let t0 = Instant::now();
                     let mut k = UpperCsc::pattern(&mesh, &elems, &dofs);
+                    let t_pattern = t0.elapsed().as_secs_f64();
                     crate::trace::mark("pattern");
-                    let f_prescribed = assembly::assemble_stiffness(&mesh, &elems, &dofs, &mut k);
-                    crate::trace::mark("assembled");
-                    timings.assemble = t.elapsed().as_secs_f64() + t_traction;
+                    // The analysis needs the pattern only: the values are assembled alongside
+                    // it, on the cores that its sequential parts (the top separators of the
+                    // ordering, faer's symbolic factorisation) leave idle.
+                    let mut values = std::mem::take(&mut k.values);
+                    let (analysed, (f_prescribed, t_values)) = rayon::join(
+                        || {
+                            let t = Instant::now();
+                            let s = analyse(&k, &dofs, y.as_ref());
+                            (s, t.elapsed().as_secs_f64())
+                        },
+                        || {
+                            let t = Instant::now();
+                            let f = assembly::assemble_values(
+                                &mesh,
+                                &elems,
+                                &dofs,
+                                (&k.col_ptr, &k.row_idx),
+                                &mut values,
+                            );
+                            crate::trace::mark("assembled");
+                            (f, t.elapsed().as_secs_f64())
+                        },
+                    );
+                    k.values = values;
+                    let (symbolic, t_analyse) = analysed;
+                    timings.assemble = t_pattern + t_values + t_traction;
+                    timings.analyse = t_analyse;
                     let (condensed, contact, ordering) =
-                        factorise(&k, &dofs, &grounded, pair.zip(y), e_star, timings)?;
+                        factorise(&k, &dofs, &grounded, pair.zip(y), e_star, symbolic?, timings)?;
+                    // Up to the end of the factorisation: without the Delassus operator.
+                    timings.build_span =
+                        t0.elapsed().as_secs_f64() + t_traction - timings.condense;
                     let nnz = k.row_idx.len();
                     let pending = match other {
                         cached::Lookup::Miss(p) => Some((p, ordering, k)),
@@ -444,12 +476,43 @@ impl Model {
     }
 }
 
-/// Analyses and factorises the stiffness `k` with springs on the `grounded` retained DOFs, and
-/// builds the contact model of `pair` on it: without contact, a partial factorisation with the
-/// retained (pilot) DOFs last; with contact, the saddle-point matrix with the contact
-/// constraint rows, whose trailing block gives the Delassus operator. Records the `analyse`,
-/// `factorise` and `condense` (the Delassus operator) timings. Also returns the ordering of the
-/// analysis (for the model cache).
+/// The symbolic analysis of a model's matrix: of `K̂` with the retained DOFs last (no contact),
+/// or of the saddle-point matrix with the contact constraint rows.
+enum Analysis {
+    Partial(PartialSymbolic),
+    Saddle(SaddleSymbolic),
+}
+
+/// Analyses the pattern of the stiffness `k` (its values are not read): with the constraint
+/// rows `y` of a contact pair, the saddle-point matrix; without, `K̂` with the retained (pilot)
+/// DOFs last.
+fn analyse(
+    k: &UpperCsc,
+    dofs: &DofMap,
+    y: Option<&crate::contact::ConstraintRows>,
+) -> Result<Analysis, ModelError> {
+    Ok(match y {
+        None => Analysis::Partial(PartialSymbolic::analyse(
+            dofs.n_free(),
+            dofs.n_retained,
+            &k.col_ptr,
+            &k.row_idx,
+        )?),
+        Some(y) => Analysis::Saddle(SaddleSymbolic::analyse(
+            dofs.n_free(),
+            &k.col_ptr,
+            &k.row_idx,
+            &y.free(dofs.n_interior),
+        )?),
+    })
+}
+
+/// Factorises the stiffness `k` analysed by [`analyse`] with springs on the `grounded`
+/// retained DOFs, and builds the contact model of `pair` on it: without contact, a partial
+/// factorisation with the retained (pilot) DOFs last; with contact, the saddle-point matrix
+/// with the contact constraint rows, whose trailing block gives the Delassus operator.
+/// Records the `factorise` and `condense` (the Delassus operator) timings. Also returns the
+/// ordering of the analysis (for the model cache).
 #[allow(clippy::type_complexity)]
 fn factorise(
     k: &UpperCsc,
@@ -457,37 +520,35 @@ fn factorise(
     grounded: &[usize],
     pair: Option<(crate::contact::Pair, crate::contact::ConstraintRows)>,
     e_star: Option<f64>,
+    analysis: Analysis,
     timings: &mut Timings,
 ) -> Result<(Condensed, Option<crate::contact::ContactModel>, Vec<usize>), ModelError> {
     let n_i = dofs.n_interior;
-    let Some((pair, y)) = pair else {
-        let t = Instant::now();
-        let symbolic =
-            PartialSymbolic::analyse(dofs.n_free(), dofs.n_retained, &k.col_ptr, &k.row_idx)?;
-        timings.analyse = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let condensed = Condensed::build(k, n_i, grounded, &symbolic)?;
-        timings.factorise = t.elapsed().as_secs_f64();
-        return Ok((condensed, None, symbolic.ordering()));
-    };
-    let y_free = y.free(n_i);
     let t = Instant::now();
-    let symbolic = SaddleSymbolic::analyse(dofs.n_free(), &k.col_ptr, &k.row_idx, &y_free)?;
-    timings.analyse = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let condensed = Condensed::build_saddle(k, n_i, grounded, &y_free, &symbolic)?;
-    timings.factorise = t.elapsed().as_secs_f64();
-    crate::trace::mark("numeric factor");
-    let t = Instant::now();
-    let contact = crate::contact::ContactModel::new(
-        pair,
-        y,
-        dofs.pilot.is_some(),
-        &condensed,
-        e_star.expect("with pair"),
-    );
-    timings.condense = t.elapsed().as_secs_f64();
-    Ok((condensed, Some(contact), symbolic.ordering()))
+    match (pair, analysis) {
+        (None, Analysis::Partial(symbolic)) => {
+            let condensed = Condensed::build(k, n_i, grounded, &symbolic)?;
+            timings.factorise = t.elapsed().as_secs_f64();
+            Ok((condensed, None, symbolic.ordering()))
+        }
+        (Some((pair, y)), Analysis::Saddle(symbolic)) => {
+            let y_free = y.free(n_i);
+            let condensed = Condensed::build_saddle(k, n_i, grounded, &y_free, &symbolic)?;
+            timings.factorise = t.elapsed().as_secs_f64();
+            crate::trace::mark("numeric factor");
+            let t = Instant::now();
+            let contact = crate::contact::ContactModel::new(
+                pair,
+                y,
+                dofs.pilot.is_some(),
+                &condensed,
+                e_star.expect("with pair"),
+            );
+            timings.condense = t.elapsed().as_secs_f64();
+            Ok((condensed, Some(contact), symbolic.ordering()))
+        }
+        _ => unreachable!("analysed with the same constraint rows"),
+    }
 }
 
 /// The curve groups the case names: supports, tractions, the pilot, then the contact pair
