@@ -155,6 +155,9 @@ struct Row {
     elements: Option<u64>,
     dofs: Option<u64>,
     phases: [Option<f64>; 7],
+    /// `build_span`: assemble, analyse and factorise as they ran (the assembly overlaps the
+    /// analysis), from `summary.json`; absent for CalculiX.
+    span: Option<f64>,
     contact_solve: Option<f64>,
     wall: Option<f64>,
     newton: Option<u64>,
@@ -173,11 +176,16 @@ impl Row {
     fn ok(&self) -> bool {
         self.status == "ok"
     }
+    /// assemble + analyse + factorise as they ran: the span the run reports, else the sum.
     fn floor(&self) -> Option<f64> {
-        Some(self.phases[1]? + self.phases[2]? + self.phases[3]?)
+        self.span
+            .filter(|s| *s > 0.0)
+            .or_else(|| Some(self.phases[1]? + self.phases[2]? + self.phases[3]?))
     }
+    /// The phases summed, the three of the floor counted as they ran.
     fn phase_total(&self) -> Option<f64> {
-        self.phases.iter().try_fold(0.0, |s, v| v.map(|v| s + v))
+        let all = self.phases.iter().try_fold(0.0, |s, v| v.map(|v| s + v))?;
+        Some(all - (self.phases[1]? + self.phases[2]? + self.phases[3]?) + self.floor()?)
     }
 }
 
@@ -429,6 +437,7 @@ fn run_ours(
     let s: Value = serde_json::from_str(&text).unwrap();
     row.elements = s["triangles"].as_u64();
     row.dofs = s["dofs_free"].as_u64();
+    row.span = s["timings_s"]["build_span"].as_f64();
     for (k, name) in PHASES.iter().enumerate() {
         row.phases[k] = s["timings_s"][name].as_f64();
     }
@@ -787,7 +796,7 @@ fn main() {
         let floor = fig.floor().unwrap();
         out!(
             rep,
-            "\nFig. 2 on L{}: whole run (sum of phases) {:.3} s / (assemble + analyse + factorise) {:.3} s = **{:.2}** (process wall {:.2} s: {:.2}×)",
+            "\nFig. 2 on L{}: whole run (sum of phases) {:.3} s / (assemble + analyse + factorise, as they ran: the assembly alongside the analysis) {:.3} s = **{:.2}** (process wall {:.2} s: {:.2}×)",
             fig.level,
             total,
             floor,
