@@ -36,6 +36,10 @@ impl ContactSystem {
     /// force-controlled load, where the tangent is nearly singular) that digit can decide
     /// whether the iteration converges, so a step that fails with them is solved again without
     /// them before the failure is reported.
+    ///
+    /// A frictional step that makes the first contact starts from the contact set of the
+    /// frictionless problem ([`Self::normal_first`]) when `opt.normal_first` allows it; the
+    /// iterations of that solve are counted in the outcome's.
     #[allow(clippy::too_many_arguments)]
     pub fn solve_step(
         &self,
