@@ -354,7 +354,10 @@ impl Words {
     }
 
     /// [`Self::for_each_chunk`] by converting each word.
-    #[cfg_attr(all(target_endian = "little", target_pointer_width = "64"), allow(dead_code))]
+    #[cfg_attr(
+        all(target_endian = "little", target_pointer_width = "64"),
+        allow(dead_code)
+    )]
     fn for_each_converted_chunk(
         &self,
         mut f: impl FnMut(&[u8]) -> std::io::Result<()>,

@@ -730,8 +730,7 @@ fn first_contact_from_the_frictionless_set_gives_the_same_step() {
         v["bodies"][1]["E"] = json!(upper.0);
         v["bodies"][1]["nu"] = json!(upper.1);
         let case: stickslip::case::Case = serde_json::from_value(v).unwrap();
-        let model =
-            stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap();
+        let model = stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap();
         let (_, mut opt) = fig2_on_l1();
         // 1e-12 floors in the dense solve of the dissimilar pair (updates ≈ 3e-11).
         opt.tolerance = 1e-10;

@@ -151,7 +151,10 @@ fn a_resumed_fig2_on_l6_writes_what_the_uninterrupted_run_writes() {
     assert_eq!(code, 0, "{err}");
     let (diff, files) = differences(&whole, &cut);
     println!("{files} files compared");
-    assert!(diff.is_empty(), "the run resumed at step 20 differs in {diff:?}");
+    assert!(
+        diff.is_empty(),
+        "the run resumed at step 20 differs in {diff:?}"
+    );
 }
 
 #[test]

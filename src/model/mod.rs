@@ -338,11 +338,17 @@ impl Model {
                     let (symbolic, t_analyse) = analysed;
                     timings.assemble = t_pattern + t_values + t_traction;
                     timings.analyse = t_analyse;
-                    let (condensed, contact, ordering) =
-                        factorise(&k, &dofs, &grounded, pair.zip(y), e_star, symbolic?, timings)?;
+                    let (condensed, contact, ordering) = factorise(
+                        &k,
+                        &dofs,
+                        &grounded,
+                        pair.zip(y),
+                        e_star,
+                        symbolic?,
+                        timings,
+                    )?;
                     // Up to the end of the factorisation: without the Delassus operator.
-                    timings.build_span =
-                        t0.elapsed().as_secs_f64() + t_traction - timings.condense;
+                    timings.build_span = t0.elapsed().as_secs_f64() + t_traction - timings.condense;
                     let nnz = k.row_idx.len();
                     let pending = match other {
                         cached::Lookup::Miss(p) => Some((p, ordering, k)),
@@ -450,8 +456,7 @@ impl Model {
             .par_iter()
             .map(|(e, mat)| {
                 let nodes = &self.mesh.triangles[*e].nodes;
-                let ue: [f64; 12] =
-                    self.dofs.element_displacement(nodes, u);
+                let ue: [f64; 12] = self.dofs.element_displacement(nodes, u);
                 elasticity::nodal_stress(&self.mesh.tri_coords(*e), &ue, mat)
             })
             .collect();

@@ -75,8 +75,7 @@ impl Model {
             .par_iter()
             .map(|(e, mat)| {
                 let nodes = &self.mesh.triangles[*e].nodes;
-                let ue: [f64; 12] =
-                    self.dofs.element_displacement(nodes, u);
+                let ue: [f64; 12] = self.dofs.element_displacement(nodes, u);
                 let (fe, kmax) =
                     crate::elasticity::element_forces(&self.mesh.tri_coords(*e), &ue, mat);
                 ElementForces { ue, fe, kmax }

@@ -84,8 +84,15 @@ impl ContactSystem {
                 c.forget_direct();
             }
         }
-        let first =
-            self.solve_step_with(w0, drive, law, prev, (guess, None), opt, cache.as_deref_mut());
+        let first = self.solve_step_with(
+            w0,
+            drive,
+            law,
+            prev,
+            (guess, None),
+            opt,
+            cache.as_deref_mut(),
+        );
         match (first, cache) {
             (Err(_), Some(c)) if fast => {
                 c.exact = true;
