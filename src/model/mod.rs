@@ -315,6 +315,7 @@ impl Model {
                     // it, on the cores that its sequential parts (the top separators of the
                     // ordering, faer's symbolic factorisation) leave idle.
                     let mut values = std::mem::take(&mut k.values);
+                    let t_join = Instant::now();
                     let (analysed, (f_prescribed, t_values)) = rayon::join(
                         || {
                             let t = Instant::now();
@@ -335,6 +336,7 @@ impl Model {
                         },
                     );
                     k.values = values;
+                    let t_joined = t_join.elapsed().as_secs_f64();
                     let (symbolic, t_analyse) = analysed;
                     timings.assemble = t_pattern + t_values + t_traction;
                     timings.analyse = t_analyse;
@@ -347,8 +349,8 @@ impl Model {
                         symbolic?,
                         timings,
                     )?;
-                    // Up to the end of the factorisation: without the Delassus operator.
-                    timings.build_span = t0.elapsed().as_secs_f64() + t_traction - timings.condense;
+                    // The pattern, the assembly and analysis together, the factorisation.
+                    timings.build_span = t_pattern + t_joined + timings.factorise + t_traction;
                     let nnz = k.row_idx.len();
                     let pending = match other {
                         cached::Lookup::Miss(p) => Some((p, ordering, k)),
@@ -482,10 +484,10 @@ impl Model {
 }
 
 /// The symbolic analysis of a model's matrix: of `K̂` with the retained DOFs last (no contact),
-/// or of the saddle-point matrix with the contact constraint rows.
+/// or of the saddle-point matrix with the contact constraint rows (kept with it, by free DOF).
 enum Analysis {
     Partial(PartialSymbolic),
-    Saddle(SaddleSymbolic),
+    Saddle(SaddleSymbolic, Vec<Vec<(usize, f64)>>),
 }
 
 /// Analyses the pattern of the stiffness `k` (its values are not read): with the constraint
@@ -503,12 +505,11 @@ fn analyse(
             &k.col_ptr,
             &k.row_idx,
         )?),
-        Some(y) => Analysis::Saddle(SaddleSymbolic::analyse(
-            dofs.n_free(),
-            &k.col_ptr,
-            &k.row_idx,
-            &y.free(dofs.n_interior),
-        )?),
+        Some(y) => {
+            let y_free = y.free(dofs.n_interior);
+            let symbolic = SaddleSymbolic::analyse(dofs.n_free(), &k.col_ptr, &k.row_idx, &y_free)?;
+            Analysis::Saddle(symbolic, y_free)
+        }
     })
 }
 
@@ -536,8 +537,7 @@ fn factorise(
             timings.factorise = t.elapsed().as_secs_f64();
             Ok((condensed, None, symbolic.ordering()))
         }
-        (Some((pair, y)), Analysis::Saddle(symbolic)) => {
-            let y_free = y.free(n_i);
+        (Some((pair, y)), Analysis::Saddle(symbolic, y_free)) => {
             let condensed = Condensed::build_saddle(k, n_i, grounded, &y_free, &symbolic)?;
             timings.factorise = t.elapsed().as_secs_f64();
             crate::trace::mark("numeric factor");
