@@ -299,25 +299,35 @@ fn scan_slave(
     // The largest initial gap sampled on a zone edge (bounds the mortar's search).
     let mut zone_gap: f64 = candidate_gap;
     let index = MasterIndex::new(mesh, master);
-    let mut near = Vec::new();
-    for (i, e) in slave.iter().enumerate() {
+    // The gaps of each edge's three samples, found in parallel and merged in edge order (the
+    // result does not depend on the threads).
+    use rayon::prelude::*;
+    let sampled: Vec<[Option<(f64, [f64; 2], [f64; 2])>; 3]> = slave
+        .par_iter()
+        .map_init(Vec::new, |near, e| {
+            let xs = e.map(|k| mesh.nodes[k]);
+            let h = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
+            [-1.0, 0.0, 1.0].map(|s| {
+                let (x, n, _, _) = mortar::frame(&xs, s);
+                point_gap(&index, x, n, 10.0 * (candidate_gap + h), near).map(|g| (g, n, x))
+            })
+        })
+        .collect();
+    for (i, (e, found)) in slave.iter().zip(&sampled).enumerate() {
         let xs = e.map(|k| mesh.nodes[k]);
+        let h = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
         let mut in_zone = false;
         let mut edge_gap: f64 = 0.0;
-        for s in [-1.0, 0.0, 1.0] {
-            let (x, n, _, _) = mortar::frame(&xs, s);
-            let h = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
-            if let Some(g) = point_gap(&index, x, n, 10.0 * (candidate_gap + h), &mut near) {
-                min_gap = min_gap.min(g);
-                samples.push((g, n));
-                if g < -1e-9 * h && deepest.is_none_or(|d: (f64, [f64; 2])| -g > d.0) {
-                    deepest = Some((-g, x));
-                }
-                if g <= candidate_gap {
-                    in_zone = true;
-                }
-                edge_gap = edge_gap.max(g.abs());
+        for &(g, n, x) in found.iter().flatten() {
+            min_gap = min_gap.min(g);
+            samples.push((g, n));
+            if g < -1e-9 * h && deepest.is_none_or(|d: (f64, [f64; 2])| -g > d.0) {
+                deepest = Some((-g, x));
             }
+            if g <= candidate_gap {
+                in_zone = true;
+            }
+            edge_gap = edge_gap.max(g.abs());
         }
         if in_zone {
             zone.push(i);

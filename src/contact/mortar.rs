@@ -215,9 +215,45 @@ pub fn build(
     let mboxes: Vec<([f64; 2], [f64; 2])> =
         master.iter().map(|e| bounding_box(&coords(e))).collect();
     let grid = super::search::EdgeGrid::new(&mboxes);
-    let mut near = Vec::new();
+    // The segments of each slave edge (the search and projections) in parallel; the sums
+    // below add them in edge order, so the operator does not depend on the threads.
+    use rayon::prelude::*;
+    let found: Vec<(Vec<(f64, f64, usize)>, usize)> = slave
+        .par_iter()
+        .map_init(Vec::new, |near, se| {
+            let xs = coords(se);
+            let chord = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
+            // Master edges near this slave edge: the normals from the edge travel at most
+            // `max_gap` (plus a margin of a few chords for the curvature of both faces).
+            let (lo, hi) = bounding_box(&xs);
+            let mut segments: Vec<(f64, f64, usize)> = Vec::new();
+            let mut lost = 0;
+            // Every master edge the test below keeps has its box within this distance of the
+            // slave edge's box; the grid gives them in increasing order, as a scan would.
+            let r = (2.0 * max_gap.abs() + 10.0 * chord + grid.max_side()) * (1.0 + 1e-9);
+            grid.query(&([lo[0] - r, lo[1] - r], [hi[0] + r, hi[1] + r]), near);
+            for &mi in near.iter() {
+                let me = &master[mi];
+                let (mlo, mhi) = mboxes[mi];
+                let reach =
+                    2.0 * max_gap.abs() + 10.0 * chord + (mhi[0] - mlo[0]).max(mhi[1] - mlo[1]);
+                if mlo[0] > hi[0] + reach
+                    || mhi[0] < lo[0] - reach
+                    || mlo[1] > hi[1] + reach
+                    || mhi[1] < lo[1] - reach
+                {
+                    continue;
+                }
+                let xm = coords(me);
+                if let Some((s_lo, s_hi)) = segment_on(&xs, &xm, n0, &mut lost) {
+                    segments.push((s_lo, s_hi, mi));
+                }
+            }
+            (segments, lost)
+        })
+        .collect();
     let mut coverage = Vec::with_capacity(slave.len());
-    for se in slave {
+    for (se, (segments, lost)) in slave.iter().zip(found) {
         let xs = coords(se);
         let chord = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
         let edge = SlaveEdge {
@@ -225,30 +261,7 @@ pub fn build(
             xs,
             chord,
         };
-        // Master edges near this slave edge: the normals from the edge travel at most
-        // `max_gap` (plus a margin of a few chords for the curvature of both faces).
-        let (lo, hi) = bounding_box(&xs);
-        let mut segments: Vec<(f64, f64, usize)> = Vec::new();
-        // Every master edge the test below keeps has its box within this distance of the
-        // slave edge's box; the grid gives them in increasing order, as a scan would.
-        let r = (2.0 * max_gap.abs() + 10.0 * chord + grid.max_side()) * (1.0 + 1e-9);
-        grid.query(&([lo[0] - r, lo[1] - r], [hi[0] + r, hi[1] + r]), &mut near);
-        for &mi in &near {
-            let me = &master[mi];
-            let (mlo, mhi) = mboxes[mi];
-            let reach = 2.0 * max_gap.abs() + 10.0 * chord + (mhi[0] - mlo[0]).max(mhi[1] - mlo[1]);
-            if mlo[0] > hi[0] + reach
-                || mhi[0] < lo[0] - reach
-                || mlo[1] > hi[1] + reach
-                || mhi[1] < lo[1] - reach
-            {
-                continue;
-            }
-            let xm = coords(me);
-            if let Some((s_lo, s_hi)) = segment_on(&xs, &xm, n0, &mut sums.lost_points) {
-                segments.push((s_lo, s_hi, mi));
-            }
-        }
+        sums.lost_points += lost;
         coverage.push(segments.iter().map(|(lo, hi, _)| hi - lo).sum::<f64>());
         for (s_lo, s_hi, mi) in segments {
             let xm = coords(&master[mi]);

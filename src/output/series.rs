@@ -138,26 +138,33 @@ impl<'a> Series<'a> {
         crate::trace::mark("point fields");
         // Taken out while the files are written, which borrows `self`.
         let mesh = self.mesh.take().unwrap_or_else(|| BodiesMesh::new(model));
-        let written = steps
-            .into_iter()
+        // The bodies files (the bulk of the bytes) of the batch in parallel; the rest of each
+        // step's files, the `.pvd` and the restart state after them, in step order.
+        let (dir, stem, compress) = (self.dir, self.stem, self.compress);
+        let bodies: Vec<Result<String, RunError>> = steps
+            .par_iter()
             .zip(&point_data)
-            .try_for_each(|(s, data)| {
-                let bodies = bodies_vtu(&mesh, data, self.compress);
-                self.write_files(s, &bodies.parts())
-            });
+            .map(|(s, data)| {
+                let name = format!("{stem}_{:04}.vtu", s.step);
+                write_parts(&dir.join(&name), &bodies_vtu(&mesh, data, compress).parts())?;
+                crate::trace::mark("bodies file written");
+                Ok(name)
+            })
+            .collect();
         self.mesh = Some(mesh);
-        written?;
+        // A failed bodies file stops the batch at its step, as if written one by one.
+        steps
+            .into_iter()
+            .zip(bodies)
+            .try_for_each(|(s, name)| self.write_files(s, name?))?;
         self.seconds += t.elapsed().as_secs_f64();
         crate::trace::mark("batch written");
         Ok(())
     }
 
-    /// Writes one step's files given its bodies dataset (as the byte strings of the file).
-    fn write_files(&mut self, s: StepOutput, bodies: &[&[u8]]) -> Result<(), RunError> {
+    /// Writes one step's files after its bodies dataset (written as `name`).
+    fn write_files(&mut self, s: StepOutput, name: String) -> Result<(), RunError> {
         let (model, stem, step) = (self.model, self.stem, s.step);
-        let name = format!("{stem}_{step:04}.vtu");
-        write_parts(&self.dir.join(&name), bodies)?;
-        crate::trace::mark("bodies file written");
         self.entries.push(PvdEntry {
             time: s.time,
             part: 0,

@@ -1,0 +1,46 @@
+//! Timing of the recovery solve (`Condensed::recover_total_many`) for 1, 2, 4, 8 and 16
+//! right-hand sides on one thread, and the check that a column solved with others equals it
+//! solved alone: `cargo run --release --example recovery_timing -- CASE`.
+use std::time::Instant;
+
+fn main() {
+    let path = std::path::PathBuf::from(std::env::args().nth(1).expect("CASE"));
+    let case = stickslip::case::Case::load(&path).unwrap();
+    let model = stickslip::model::Model::build(&case, &path).unwrap();
+    let nr = model.dofs.n_retained;
+    let f = model.load(1.0);
+    let column = |j: usize| {
+        let r: Vec<f64> = (0..nr)
+            .map(|i| ((i * 7919 + j * 104729) % 1000) as f64 * 1e-3 - 0.5)
+            .collect();
+        (f.clone(), r)
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let alone: Vec<Vec<f64>> = (0..16)
+            .map(|j| model.condensed.recover_total_many(&[column(j)]).remove(0))
+            .collect();
+        for k in [1usize, 2, 4, 8, 16] {
+            let cases: Vec<_> = (0..k).map(column).collect();
+            let mut best = f64::INFINITY;
+            let mut out = Vec::new();
+            for _ in 0..5 {
+                let t = Instant::now();
+                out = model.condensed.recover_total_many(&cases);
+                best = best.min(t.elapsed().as_secs_f64());
+            }
+            let same = out
+                .iter()
+                .zip(&alone)
+                .all(|(a, b)| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits()));
+            println!(
+                "{k:2} columns: {:7.2} ms, {:6.2} ms per column, equal to alone: {same}",
+                best * 1e3,
+                best * 1e3 / k as f64
+            );
+        }
+    });
+}
