@@ -176,47 +176,92 @@ fn mixed_element_stiffness(xe: &[[f64; 2]; 6], mat: &Material) -> [f64; 144] {
     k
 }
 
-/// The internal nodal forces `K_e u_e` of an element with displacements `ue`, integrated like
-/// [`element_stiffness`] (the same rule) without forming `K_e`: `Σ_q w_q det J_q B_qᵀ σ_q`, plus
-/// `λ A b̄ (b̄ · u_e)` for a mixed element. Also the largest entry of `K_e` in magnitude, which is
-/// its largest diagonal entry (`K_e` is positive semi-definite, `|K_ij| ≤ √(K_ii K_jj)`).
-pub fn element_forces(xe: &[[f64; 2]; 6], ue: &[f64; 12], mat: &Material) -> ([f64; 12], f64) {
+/// What [`element_forces`] reads of an element's geometry and material: per point of the rule,
+/// `w det J` and the shape-function gradients; the largest entry of `K_e` in magnitude (its
+/// largest diagonal entry: `K_e` is positive semi-definite, `|K_ij| ≤ √(K_ii K_jj)`); and
+/// for a mixed element its mean divergence and area. Kept per element by a model whose
+/// element forces are wanted many times (a sweep's checks, one per row).
+pub struct ForceGeometry {
+    s: [f64; 6],
+    dndx: [[[f64; 2]; 6]; 6],
+    kmax: f64,
+    mean_divergence: Option<Box<([f64; 12], f64)>>,
+}
+
+/// The [`ForceGeometry`] of an element.
+pub fn force_geometry(xe: &[[f64; 2]; 6], mat: &Material) -> ForceGeometry {
     let (l, m) = mat.lame();
     let mixed = mat.is_mixed();
-    let mut f = [0.0; 12];
+    let mut s = [0.0; 6];
+    let mut dndx = [[[0.0; 2]; 6]; 6];
     let mut diag = [0.0; 12];
-    for (p, w) in TRI_6.iter() {
+    let (a_xx, a_yy) = if mixed {
+        (2.0 * m, m)
+    } else {
+        (l + 2.0 * m, m)
+    };
+    for (q, (p, w)) in TRI_6.iter().enumerate() {
         let mp = tri6::map_point(xe, p[0], p[1]);
-        let s = w * mp.det_j;
-        let e = strain(&mp, ue);
+        s[q] = w * mp.det_j;
+        dndx[q] = mp.dndx;
+        for (a, g) in mp.dndx.iter().enumerate() {
+            let (ax, ay) = (g[0], g[1]);
+            diag[2 * a] += s[q] * (a_xx * ax * ax + a_yy * ay * ay);
+            diag[2 * a + 1] += s[q] * (a_xx * ay * ay + a_yy * ax * ax);
+        }
+    }
+    let mean_divergence = mixed.then(|| {
+        let (bbar, area) = mean_divergence(xe);
+        for i in 0..12 {
+            diag[i] += l * area * bbar[i] * bbar[i];
+        }
+        Box::new((bbar, area))
+    });
+    ForceGeometry {
+        s,
+        dndx,
+        kmax: diag.iter().fold(0.0f64, |a, d| a.max(d.abs())),
+        mean_divergence,
+    }
+}
+
+/// The internal nodal forces `K_e u_e` of an element with displacements `ue`, integrated like
+/// [`element_stiffness`] (the same rule) without forming `K_e`: `Σ_q w_q det J_q B_qᵀ σ_q`, plus
+/// `λ A b̄ (b̄ · u_e)` for a mixed element. Also the largest entry of `K_e` in magnitude.
+pub fn element_forces(xe: &[[f64; 2]; 6], ue: &[f64; 12], mat: &Material) -> ([f64; 12], f64) {
+    element_forces_with(&force_geometry(xe, mat), ue, mat)
+}
+
+/// [`element_forces`] from the element's [`ForceGeometry`] (the same arithmetic).
+pub fn element_forces_with(
+    geo: &ForceGeometry,
+    ue: &[f64; 12],
+    mat: &Material,
+) -> ([f64; 12], f64) {
+    let (l, m) = mat.lame();
+    let mut f = [0.0; 12];
+    for (s, dndx) in geo.s.iter().zip(&geo.dndx) {
+        let e = strain_of(dndx, ue);
         // The stress of the B part: σ = D ε, or μ D₀ ε for a mixed element (its λ part below).
-        let sig = if mixed {
+        let sig = if geo.mean_divergence.is_some() {
             [2.0 * m * e[0], 2.0 * m * e[1], m * e[2]]
         } else {
             mat.stress(e)
         };
-        let (a_xx, a_yy) = if mixed {
-            (2.0 * m, m)
-        } else {
-            (l + 2.0 * m, m)
-        };
-        for (a, g) in mp.dndx.iter().enumerate() {
+        for (a, g) in dndx.iter().enumerate() {
             let (ax, ay) = (g[0], g[1]);
             f[2 * a] += s * (ax * sig[0] + ay * sig[2]);
             f[2 * a + 1] += s * (ay * sig[1] + ax * sig[2]);
-            diag[2 * a] += s * (a_xx * ax * ax + a_yy * ay * ay);
-            diag[2 * a + 1] += s * (a_xx * ay * ay + a_yy * ax * ax);
         }
     }
-    if mixed {
-        let (bbar, area) = mean_divergence(xe);
+    if let Some(md) = &geo.mean_divergence {
+        let (bbar, area) = (&md.0, md.1);
         let theta: f64 = bbar.iter().zip(ue).map(|(b, u)| b * u).sum();
         for i in 0..12 {
             f[i] += l * area * bbar[i] * theta;
-            diag[i] += l * area * bbar[i] * bbar[i];
         }
     }
-    (f, diag.iter().fold(0.0f64, |a, d| a.max(d.abs())))
+    (f, geo.kmax)
 }
 
 /// Consistent nodal forces of a body force `b(x)` per unit volume (12 entries).
@@ -235,9 +280,14 @@ pub fn element_body_force(xe: &[[f64; 2]; 6], b: &dyn Fn([f64; 2]) -> [f64; 2]) 
 
 /// Strain (εxx, εyy, γxy) at a mapped point from element displacements `ue` (12 entries).
 pub fn strain(mp: &MapPoint, ue: &[f64; 12]) -> [f64; 3] {
+    strain_of(&mp.dndx, ue)
+}
+
+/// Strain from the shape-function gradients `dndx` at a point.
+fn strain_of(dndx: &[[f64; 2]; 6], ue: &[f64; 12]) -> [f64; 3] {
     let mut e = [0.0; 3];
     for a in 0..6 {
-        let (gx, gy) = (mp.dndx[a][0], mp.dndx[a][1]);
+        let (gx, gy) = (dndx[a][0], dndx[a][1]);
         e[0] += gx * ue[2 * a];
         e[1] += gy * ue[2 * a + 1];
         e[2] += gy * ue[2 * a] + gx * ue[2 * a + 1];

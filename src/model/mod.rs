@@ -114,6 +114,9 @@ pub struct Model {
     /// The mesh's diameter and the largest Young's modulus of the bodies in use (see
     /// [`Model::scales`]).
     scales: std::sync::OnceLock<(f64, f64)>,
+    /// Per element, what its internal forces read of its geometry, once
+    /// [`Model::keep_force_geometry`] has been called (a sweep does: its rows' checks).
+    force_geometry: std::sync::OnceLock<Vec<crate::elasticity::ForceGeometry>>,
 }
 
 impl Model {
@@ -432,6 +435,7 @@ impl Model {
             cache: cache_report,
             cache_job,
             contact_blocks: std::sync::OnceLock::new(),
+            force_geometry: std::sync::OnceLock::new(),
             scales: std::sync::OnceLock::new(),
         })
     }

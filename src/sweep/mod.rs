@@ -302,6 +302,8 @@ pub fn sweep(
     // The rows factorise the same Delassus blocks: once for all of them.
     if rows.len() > 1 {
         model.share_contact_blocks();
+        // Every row's checks compute the element forces of its field.
+        model.keep_force_geometry();
     }
     // The rows run in chunks of eight per thread; the fields the checks need are recovered for
     // a whole chunk in one block solve, which reads the factor (≈ 200 MB on L5) once instead of
