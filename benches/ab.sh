@@ -5,8 +5,10 @@
 #
 #   benches/ab.sh N BIN_A BIN_B [CASE] [cold|warm] [ENV_A] [ENV_B]
 #
-# cold: every run with --no-cache (the whole build of the model); warm: each binary has its own
-# fresh cache directory, filled by one untimed run, and the N timed runs are hits.
+# cold: every run with --no-cache (the whole build of the model); first: every run with a fresh
+# cache directory (the whole build, and the entry written: a user's first run); warm: each
+# binary has its own fresh cache directory, filled by one untimed run, and the N timed runs are
+# hits.
 # ENV_A / ENV_B: space-separated VAR=value assignments for each side (e.g. the ordering:
 # `STICKSLIP_ORDERING=amd` against `STICKSLIP_ORDERING=nd` with the same binary).
 #
@@ -18,7 +20,11 @@ N=$1 A=$2 B=$3 CASE=${4:-cases/fig2.json} MODE=${5:-cold} EA=${6:-} EB=${7:-}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 args() { # side
-  if [ "$MODE" = warm ]; then echo "--cache $work/cache_$1"; else echo "--no-cache"; fi
+  case "$MODE" in
+    warm) echo "--cache $work/cache_$1" ;;
+    first) rm -rf "$work/cache_$1"; echo "--cache $work/cache_$1" ;;
+    *) echo "--no-cache" ;;
+  esac
 }
 run() { # side bin env
   local t0 t1

@@ -9,6 +9,27 @@ fn main() {
     let model = stickslip::model::Model::build(&case, &path).unwrap();
     let nr = model.dofs.n_retained;
     let f = model.load(1.0);
+    if let stickslip::condense::Factor::Saddle(sf) = &model.condensed.chol {
+        let layout = sf.layout();
+        let n = model.dofs.n_free();
+        let (mut used, mut total) = (0usize, 0usize);
+        for s in 0..layout.begin.len() - 1 {
+            let (b, e) = (layout.begin[s], layout.begin[s + 1]);
+            let pat = &layout.rows[layout.row_ptr[s]..layout.row_ptr[s + 1]];
+            let nrows = e - b + pat.len();
+            total += nrows * (e - b);
+            if b < n {
+                let kp = pat.partition_point(|&r| r < n);
+                used += (e.min(n) - b) * (e - b + kp);
+            }
+        }
+        println!(
+            "factor values: {} MB, of which the K̂ solves read {} MB ({:.0} %)",
+            total * 8 / 1_000_000,
+            used * 8 / 1_000_000,
+            100.0 * used as f64 / total as f64
+        );
+    }
     let column = |j: usize| {
         let r: Vec<f64> = (0..nr)
             .map(|i| ((i * 7919 + j * 104729) % 1000) as f64 * 1e-3 - 0.5)

@@ -33,7 +33,7 @@ use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 /// Version of the file format and of the meaning of the sections. Bump it when either changes.
-pub const FORMAT: u32 = 1;
+pub const FORMAT: u32 = 2;
 const MAGIC: [u8; 8] = *b"stkslpMC";
 /// Default size cap of the cache directory.
 pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
@@ -306,6 +306,9 @@ pub enum Words {
     F64(Vec<f64>),
     /// Floats shared with the model (the factor values, written while the run goes on).
     Shared(crate::linsolve::SharedValues),
+    /// The ranges `(start, len)` of floats shared with the model, one after the other (the
+    /// leading block of a saddle factor, [`crate::linsolve::Supernodes::leading`]).
+    Gathered(crate::linsolve::SharedValues, Vec<(usize, usize)>),
 }
 
 impl Words {
@@ -315,6 +318,7 @@ impl Words {
             Words::Usize(v) => v.len(),
             Words::F64(v) => v.len(),
             Words::Shared(v) => v.len(),
+            Words::Gathered(_, r) => r.iter().map(|&(_, len)| len).sum(),
         }
     }
 
@@ -325,7 +329,7 @@ impl Words {
     fn kind(&self) -> u32 {
         match self {
             Words::U64(_) | Words::Usize(_) => 1,
-            Words::F64(_) | Words::Shared(_) => 2,
+            Words::F64(_) | Words::Shared(_) | Words::Gathered(..) => 2,
         }
     }
 
@@ -343,6 +347,21 @@ impl Words {
                 Words::Usize(v) => bytemuck::cast_slice(v),
                 Words::F64(v) => bytemuck::cast_slice(v),
                 Words::Shared(v) => bytemuck::cast_slice(&v[..]),
+                Words::Gathered(v, ranges) => {
+                    // The ranges are short (a column each): gathered a chunk at a time.
+                    let mut buf = Vec::with_capacity(CHUNK + 8 * 1024);
+                    for &(a, len) in ranges {
+                        buf.extend_from_slice(bytemuck::cast_slice(&v[a..a + len]));
+                        if buf.len() >= CHUNK {
+                            f(&buf)?;
+                            buf.clear();
+                        }
+                    }
+                    if !buf.is_empty() {
+                        f(&buf)?;
+                    }
+                    return Ok(());
+                }
             };
             for c in bytes.chunks(CHUNK) {
                 f(c)?;
@@ -380,6 +399,7 @@ impl Words {
             Words::Usize(v) => chunks!(v, |x: usize| x as u64),
             Words::F64(v) => chunks!(v, |x: f64| x),
             Words::Shared(v) => chunks!(&v[..], |x: f64| x),
+            Words::Gathered(..) => chunks!(self.gathered().expect("gathered words"), |x: f64| x),
         }
         Ok(())
     }
@@ -398,6 +418,20 @@ impl Words {
         match self {
             Words::F64(v) => Some(v),
             Words::Shared(v) => Some(v.to_vec()),
+            Words::Gathered(..) => self.gathered(),
+            _ => None,
+        }
+    }
+
+    /// The floats of [`Words::Gathered`], one range after the other.
+    fn gathered(&self) -> Option<Vec<f64>> {
+        match self {
+            Words::Gathered(v, ranges) => Some(
+                ranges
+                    .iter()
+                    .flat_map(|&(a, len)| v[a..a + len].iter().copied())
+                    .collect(),
+            ),
             _ => None,
         }
     }
@@ -1059,8 +1093,19 @@ mod tests {
             Words::F64(f.clone()),
             Words::U64(u.iter().map(|&x| x as u64).collect()),
             Words::Usize(u.clone()),
-            Words::Shared(shared),
+            Words::Shared(shared.clone()),
+            // Ranges that cover every value once, in order, in pieces of 1 to 40 words.
+            Words::Gathered(shared, {
+                let (mut r, mut a) = (Vec::new(), 0);
+                while a < n {
+                    let len = (1 + a % 40).min(n - a);
+                    r.push((a, len));
+                    a += len;
+                }
+                r
+            }),
         ] {
+            assert_eq!(w.len(), n);
             let (mut direct, mut converted) = (Vec::new(), Vec::new());
             w.for_each_chunk(|b| {
                 direct.extend_from_slice(b);

@@ -174,9 +174,14 @@ pub(super) fn entry(b: Built) -> Entry {
         b.k.row_idx.len() as u64,
         b.condensed.krr_scale.to_bits(),
     ];
-    let values = match &b.condensed.chol {
-        Factor::Saddle(f) => f.values(),
-        Factor::Partial(f) => f.values(),
+    // A contact model's factor: its leading block only (what the solves with K̂ read; the
+    // Delassus operator formed from the rest is a section of its own).
+    let (layout, values) = match &b.condensed.chol {
+        Factor::Saddle(f) => {
+            let (layout, ranges) = f.layout().leading(s.n_free);
+            (Some(layout), Words::Gathered(f.values(), ranges))
+        }
+        Factor::Partial(f) => (None, Words::Shared(f.values())),
     };
     let mut sections = vec![
         (tag::META, Words::U64(meta)),
@@ -205,14 +210,13 @@ pub(super) fn entry(b: Built) -> Entry {
         sections.push((tag::COL_PTR, Words::Usize(b.k.col_ptr)));
         sections.push((tag::ROW_IDX, Words::Usize(b.k.row_idx)));
     }
-    if let Factor::Saddle(f) = &b.condensed.chol {
-        let layout = f.layout();
-        sections.push((tag::SN_BEGIN, Words::Usize(layout.begin.clone())));
-        sections.push((tag::SN_ROW_PTR, Words::Usize(layout.row_ptr.clone())));
-        sections.push((tag::SN_ROWS, Words::Usize(layout.rows.clone())));
-        sections.push((tag::SN_VAL_PTR, Words::Usize(layout.val_ptr.clone())));
+    if let Some(layout) = layout {
+        sections.push((tag::SN_BEGIN, Words::Usize(layout.begin)));
+        sections.push((tag::SN_ROW_PTR, Words::Usize(layout.row_ptr)));
+        sections.push((tag::SN_ROWS, Words::Usize(layout.rows)));
+        sections.push((tag::SN_VAL_PTR, Words::Usize(layout.val_ptr)));
     }
-    sections.push((tag::VALUES, Words::Shared(values)));
+    sections.push((tag::VALUES, values));
     Entry { sections }
 }
 
