@@ -283,6 +283,9 @@ struct ZoneScan {
     zone_gap: f64,
 }
 
+/// One gap sample of a slave edge: (gap, slave normal, point).
+type Sample = (f64, [f64; 2], [f64; 2]);
+
 /// Samples the initial gap at the ends and middle of every slave edge; an edge with a sample
 /// within `candidate_gap` is in the zone.
 fn scan_slave(
@@ -302,7 +305,7 @@ fn scan_slave(
     // The gaps of each edge's three samples, found in parallel and merged in edge order (the
     // result does not depend on the threads).
     use rayon::prelude::*;
-    let sampled: Vec<[Option<(f64, [f64; 2], [f64; 2])>; 3]> = slave
+    let sampled: Vec<[Option<Sample>; 3]> = slave
         .par_iter()
         .map_init(Vec::new, |near, e| {
             let xs = e.map(|k| mesh.nodes[k]);

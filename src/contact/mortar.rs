@@ -218,7 +218,7 @@ pub fn build(
     // The segments of each slave edge (the search and projections) in parallel; the sums
     // below add them in edge order, so the operator does not depend on the threads.
     use rayon::prelude::*;
-    let found: Vec<(Vec<(f64, f64, usize)>, usize)> = slave
+    let found: Vec<(Vec<Segment>, usize)> = slave
         .par_iter()
         .map_init(Vec::new, |near, se| {
             let xs = coords(se);
@@ -226,7 +226,7 @@ pub fn build(
             // Master edges near this slave edge: the normals from the edge travel at most
             // `max_gap` (plus a margin of a few chords for the curvature of both faces).
             let (lo, hi) = bounding_box(&xs);
-            let mut segments: Vec<(f64, f64, usize)> = Vec::new();
+            let mut segments: Vec<Segment> = Vec::new();
             let mut lost = 0;
             // Every master edge the test below keeps has its box within this distance of the
             // slave edge's box; the grid gives them in increasing order, as a scan would.
@@ -271,6 +271,9 @@ pub fn build(
     }
     sums.into_mortar(x, coverage)
 }
+
+/// A segment `(s_lo, s_hi, master edge)` of a slave edge that projects onto a master edge.
+type Segment = (f64, f64, usize);
 
 /// Lower and upper corners of the bounding box of `points`.
 fn bounding_box(points: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
