@@ -183,7 +183,7 @@ fn main() {
             let _ = std::fs::remove_dir_all(&cache_dir);
             let out = work.join(format!("L{l}_{k}"));
             colds.push(run(&path, &out, &threads, &cache_args));
-            // The cold run leaves its cache entry (≈ 0.9 GB at L7) and output in the page
+            // The cold run leaves its cache entry (≈ 0.6 GB at L7) and output in the page
             // cache; flush them outside the timed runs so that the kernel's writeback does not
             // run during the next run's factorisation.
             flush();

@@ -5,10 +5,12 @@
 //! the free DOFs, the grounded DOFs and their springs, the forces of the prescribed
 //! displacements; for a contact model the Delassus operator `W`, the condensed loads `w0` (of
 //! the tractions, with the traction forces they belong to, and of the prescribed
-//! displacements) and the supernodal layout of the factor ([`crate::linsolve::Supernodes`]:
-//! a hit needs no symbolic analysis); without contact the upper pattern of `K`, from which the
-//! analysis is redone with the stored ordering (faer has no way to store it); last, the values
-//! of the numeric factor, mapped from the file and checked against its hash in a second thread
+//! displacements) and the supernodal layout of the factor's leading block (the free DOFs'
+//! columns and rows, [`crate::linsolve::Supernodes::leading`]: a hit needs no symbolic
+//! analysis, and the rest of the saddle factor only served to form `W`); without contact the
+//! upper pattern of `K`, from which the analysis is redone with the stored ordering (faer has
+//! no way to store it); last, the values of the numeric factor (for a contact model those of
+//! the leading block), mapped from the file and checked against its hash in a second thread
 //! while the layout is checked or the analysis redone ([`cache::Reader::map_next`]).
 
 use crate::assembly::UpperCsc;
