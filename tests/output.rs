@@ -337,3 +337,47 @@ fn vtu_values_are_the_runs_and_compressed_files_hold_the_same_arrays() {
         );
     }
 }
+
+/// The writer writes the bodies files of a batch of steps side by side; a step that cannot be
+/// written (a directory in its file's place) stops the batch there as if its steps were
+/// written one by one: no file of a later step of the batch stays behind, and nothing of the
+/// failed step but what was in its place.
+#[test]
+fn a_failed_step_of_a_batch_leaves_no_file_of_the_steps_after_it() {
+    use stickslip::output::series::{Series, StepOutput};
+    let case: stickslip::case::Case =
+        serde_json::from_value(shipped_case_on("vm272_cm.json", "vm272_L1.msh")).unwrap();
+    let model = stickslip::model::Model::build(&case, &repo().join("cases/vm272_cm.json")).unwrap();
+    let dir = common::tempdir("batch-write-error");
+    std::fs::create_dir_all(dir.join("case_0003.vtu")).unwrap();
+    let step = |k: usize| StepOutput {
+        step: k,
+        time: k as f64,
+        scale: 1.0,
+        u: Some(vec![0.0; model.dofs.n_free()]),
+        contact: None,
+        state: None,
+        reply: None,
+    };
+    let mut series = Series::new(&model, &dir, "case", false);
+    let err = series.write(vec![step(3), step(4), step(5)]).unwrap_err();
+    assert!(err.to_string().contains("case_0003.vtu"), "{err}");
+    let files: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .collect();
+    assert_eq!(files, ["case_0003.vtu"]);
+    assert!(dir.join("case_0003.vtu").is_dir());
+    // The same batch into a clean directory writes every step.
+    let clean = common::tempdir("batch-write-ok");
+    let mut series = Series::new(&model, &clean, "case", false);
+    series.write(vec![step(3), step(4), step(5)]).unwrap();
+    for f in [
+        "case_0003.vtu",
+        "case_0004.vtu",
+        "case_0005.vtu",
+        "case.pvd",
+    ] {
+        assert!(clean.join(f).is_file(), "{f}");
+    }
+}

@@ -152,11 +152,21 @@ impl<'a> Series<'a> {
             })
             .collect();
         self.mesh = Some(mesh);
-        // A failed bodies file stops the batch at its step, as if written one by one.
-        steps
-            .into_iter()
-            .zip(bodies)
-            .try_for_each(|(s, name)| self.write_files(s, name?))?;
+        // A failed step stops the batch there, as if its steps were written one by one: the
+        // bodies files of the steps after it (written alongside) are removed.
+        let mut bodies = bodies.into_iter();
+        for s in steps {
+            let written = bodies
+                .next()
+                .expect("one bodies file per step")
+                .and_then(|name| self.write_files(s, name));
+            if let Err(e) = written {
+                for name in bodies.flatten() {
+                    let _ = std::fs::remove_file(dir.join(name));
+                }
+                return Err(e);
+            }
+        }
         self.seconds += t.elapsed().as_secs_f64();
         crate::trace::mark("batch written");
         Ok(())
