@@ -19,15 +19,17 @@ set -euo pipefail
 N=$1 A=$2 B=$3 CASE=${4:-cases/fig2.json} MODE=${5:-cold} EA=${6:-} EB=${7:-}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+case "$MODE" in cold | first | warm) ;; *) echo "ab.sh: MODE must be cold, first or warm" >&2; exit 2 ;; esac
 args() { # side
   case "$MODE" in
-    warm) echo "--cache $work/cache_$1" ;;
-    first) rm -rf "$work/cache_$1"; echo "--cache $work/cache_$1" ;;
+    warm | first) echo "--cache $work/cache_$1" ;;
     *) echo "--no-cache" ;;
   esac
 }
 run() { # side bin env
   local t0 t1
+  # A first run starts from an empty cache directory (removed before the clock starts).
+  if [ "$MODE" = first ]; then rm -rf "$work/cache_$1"; fi
   t0=$(date +%s%N)
   env $3 "$2" run "$CASE" --out "$work/out_$1" --quiet --threads "${STICKSLIP_THREADS:-2}" $(args "$1") >/dev/null
   t1=$(date +%s%N)

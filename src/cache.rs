@@ -1120,6 +1120,29 @@ mod tests {
             assert_eq!(direct.len(), 8 * n);
             assert!(direct == converted);
         }
+        // Ranges with gaps (as the leading block of a factor skips the constraint rows): the
+        // bytes of exactly the floats in them, in order, both ways.
+        let shared = std::sync::Arc::new(crate::linsolve::FactorValues::Owned(f.clone()));
+        let ranges: Vec<(usize, usize)> =
+            (0..n / 50).map(|k| (50 * k + k % 7, 30 + k % 11)).collect();
+        let expected: Vec<u8> = ranges
+            .iter()
+            .flat_map(|&(a, len)| f[a..a + len].iter().flat_map(|x| x.to_le_bytes()))
+            .collect();
+        let w = Words::Gathered(shared, ranges);
+        let (mut direct, mut converted) = (Vec::new(), Vec::new());
+        w.for_each_chunk(|b| {
+            direct.extend_from_slice(b);
+            Ok(())
+        })
+        .unwrap();
+        w.for_each_converted_chunk(|b| {
+            converted.extend_from_slice(b);
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(8 * w.len(), expected.len());
+        assert!(direct == expected && converted == expected);
     }
 
     #[test]

@@ -238,6 +238,11 @@ pub fn element_forces_with(
     ue: &[f64; 12],
     mat: &Material,
 ) -> ([f64; 12], f64) {
+    debug_assert_eq!(
+        geo.mean_divergence.is_some(),
+        mat.is_mixed(),
+        "the geometry of another material"
+    );
     let (l, m) = mat.lame();
     let mut f = [0.0; 12];
     for (s, dndx) in geo.s.iter().zip(&geo.dndx) {

@@ -964,6 +964,13 @@ impl SaddleFactor {
     pub fn delassus(&self) -> Option<faer::Mat<f64>> {
         use faer::linalg::matmul::triangular::{BlockStructure, matmul};
         let (n, m) = (self.n, self.m);
+        // A factor restored from a model-cache entry keeps its leading block only
+        // ([`Supernodes::leading`]): its W comes with the entry, and is not formed again.
+        let whole = self.layout.begin.last() == Some(&(n + m));
+        debug_assert!(whole, "the Delassus operator of a leading block alone");
+        if !whole {
+            return None;
+        }
         // L_MM with D_MM on its diagonal.
         let mut l = faer::Mat::<f64>::zeros(m, m);
         for s in 0..self.layout.n_supernodes() {
@@ -1093,6 +1100,24 @@ mod tests {
         let mut x3 = b.clone();
         leading.solve_in_place(&mut x3);
         assert!(x.iter().zip(&x3).all(|(a, c)| a.to_bits() == c.to_bits()));
+        // Three right-hand sides at once, against the whole factor.
+        let bs: Vec<f64> = (0..3 * n).map(|i| (i as f64 * 0.61).cos()).collect();
+        let (mut y1, mut y2) = (bs.clone(), bs.clone());
+        f.solve_block_in_place(&mut y1, 3);
+        leading.solve_block_in_place(&mut y2, 3);
+        assert!(y1.iter().zip(&y2).all(|(a, c)| a.to_bits() == c.to_bits()));
+        // Broken leading layouts: a constraint row below a free column, a tiling that ends
+        // between the free DOFs and the constraint rows.
+        let (lead, _) = layout.leading(n);
+        let with_rows = (0..lead.begin.len() - 1)
+            .find(|&s| lead.row_ptr[s + 1] > lead.row_ptr[s])
+            .expect("a leading supernode with rows below it");
+        let mut bad = lead.clone();
+        bad.rows[bad.row_ptr[with_rows + 1] - 1] = n;
+        assert!(bad.check(n, y.len()).is_err());
+        let mut bad = lead.clone();
+        *bad.begin.last_mut().unwrap() = n + 1;
+        assert!(bad.check(n, y.len()).is_err());
         // Broken layouts.
         let broken = |edit: &dyn Fn(&mut Supernodes)| {
             let mut l = (*layout).clone();

@@ -368,6 +368,38 @@ fn a_failed_step_of_a_batch_leaves_no_file_of_the_steps_after_it() {
         .collect();
     assert_eq!(files, ["case_0003.vtu"]);
     assert!(dir.join("case_0003.vtu").is_dir());
+    // A later step of the batch that fails: the steps before it are whole (with their `.pvd`),
+    // the failed one keeps what was in its place, and a file of a step after it left by an
+    // earlier run is not touched.
+    let later = common::tempdir("batch-write-error-later");
+    std::fs::create_dir_all(later.join("case_0004.vtu")).unwrap();
+    std::fs::write(later.join("case_0005.vtu"), b"an earlier run's").unwrap();
+    let mut series = Series::new(&model, &later, "case", false);
+    let err = series.write(vec![step(3), step(4), step(5)]).unwrap_err();
+    assert!(err.to_string().contains("case_0004.vtu"), "{err}");
+    let mut files: Vec<String> = std::fs::read_dir(&later)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .collect();
+    files.sort();
+    assert_eq!(
+        files,
+        [
+            "case.pvd",
+            "case_0003.vtu",
+            "case_0004.vtu",
+            "case_0005.vtu"
+        ]
+    );
+    assert_eq!(
+        std::fs::read(later.join("case_0005.vtu")).unwrap(),
+        b"an earlier run's"
+    );
+    let pvd = std::fs::read_to_string(later.join("case.pvd")).unwrap();
+    assert!(
+        pvd.contains("case_0003.vtu") && !pvd.contains("case_0004.vtu"),
+        "{pvd}"
+    );
     // The same batch into a clean directory writes every step.
     let clean = common::tempdir("batch-write-ok");
     let mut series = Series::new(&model, &clean, "case", false);

@@ -7,7 +7,7 @@ pub mod series;
 pub mod vtu;
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Writes `bytes` to `path` atomically (temporary file + rename).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
@@ -17,21 +17,41 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// Writes the byte strings `parts`, one after the other, to `path` atomically (temporary
 /// file + rename), without joining them in memory first.
 pub fn write_atomic_parts(path: &Path, parts: &[&[u8]]) -> std::io::Result<()> {
+    let tmp = write_temporary(path, parts)?;
+    commit(&tmp, path)
+}
+
+/// The first half of [`write_atomic_parts`]: writes `parts` to the temporary name of `path`
+/// (in the same directory) and returns it; nothing is left behind on an error.
+pub fn write_temporary(path: &Path, parts: &[&[u8]]) -> std::io::Result<PathBuf> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
     let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
-    {
+    let written = (|| {
         let mut f = std::fs::File::create(&tmp)?;
         for p in parts {
             f.write_all(p)?;
         }
         f.sync_all().ok();
+        Ok(())
+    })();
+    match written {
+        Ok(()) => Ok(tmp),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
     }
-    std::fs::rename(&tmp, path).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
+}
+
+/// The second half of [`write_atomic_parts`]: renames the temporary file `tmp` to `path`
+/// (removing it if that fails).
+pub fn commit(tmp: &Path, path: &Path) -> std::io::Result<()> {
+    std::fs::rename(tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(tmp);
     })
 }
 

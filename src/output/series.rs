@@ -18,7 +18,7 @@ use crate::contact::solver::State;
 use crate::error::RunError;
 use crate::model::Model;
 use crate::restart::{self, SavedRun};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::thread::{Scope, ScopedJoinHandle};
 use std::time::Instant;
@@ -30,10 +30,15 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
 
 /// Writes the byte strings `parts` to `path` atomically, the error naming the file.
 fn write_parts(path: &Path, parts: &[&[u8]]) -> Result<(), RunError> {
-    super::write_atomic_parts(path, parts).map_err(|source| RunError::Write {
+    super::write_atomic_parts(path, parts).map_err(|source| write_error(path, source))
+}
+
+/// The error of a file that could not be written.
+fn write_error(path: &Path, source: std::io::Error) -> RunError {
+    RunError::Write {
         path: path.display().to_string(),
         source,
-    })
+    }
 }
 
 /// One converged step to write, with its own copy of what it needs.
@@ -138,31 +143,39 @@ impl<'a> Series<'a> {
         crate::trace::mark("point fields");
         // Taken out while the files are written, which borrows `self`.
         let mesh = self.mesh.take().unwrap_or_else(|| BodiesMesh::new(model));
-        // The bodies files (the bulk of the bytes) of the batch in parallel; the rest of each
-        // step's files, the `.pvd` and the restart state after them, in step order.
+        // The bodies files (the bulk of the bytes) of the batch are written in parallel, each
+        // to its temporary name; then, step by step in order, each is renamed into place and
+        // followed by the step's other files, the `.pvd` and the restart state. A step that
+        // fails stops the batch there, as if its steps were written one by one: the later
+        // steps' temporary files are removed, and no file of theirs is touched.
         let (dir, stem, compress) = (self.dir, self.stem, self.compress);
-        let bodies: Vec<Result<String, RunError>> = steps
+        let bodies: Vec<Result<(PathBuf, String), RunError>> = steps
             .par_iter()
             .zip(&point_data)
             .map(|(s, data)| {
                 let name = format!("{stem}_{:04}.vtu", s.step);
-                write_parts(&dir.join(&name), &bodies_vtu(&mesh, data, compress).parts())?;
-                crate::trace::mark("bodies file written");
-                Ok(name)
+                let path = dir.join(&name);
+                let tmp = super::write_temporary(&path, &bodies_vtu(&mesh, data, compress).parts())
+                    .map_err(|source| write_error(&path, source))?;
+                Ok((tmp, name))
             })
             .collect();
         self.mesh = Some(mesh);
-        // A failed step stops the batch there, as if its steps were written one by one: the
-        // bodies files of the steps after it (written alongside) are removed.
         let mut bodies = bodies.into_iter();
         for s in steps {
-            let written = bodies
-                .next()
-                .expect("one bodies file per step")
-                .and_then(|name| self.write_files(s, name));
+            let written =
+                bodies
+                    .next()
+                    .expect("one bodies file per step")
+                    .and_then(|(tmp, name)| {
+                        let path = dir.join(&name);
+                        super::commit(&tmp, &path).map_err(|source| write_error(&path, source))?;
+                        crate::trace::mark("bodies file written");
+                        self.write_files(s, name)
+                    });
             if let Err(e) = written {
-                for name in bodies.flatten() {
-                    let _ = std::fs::remove_file(dir.join(name));
+                for (tmp, _) in bodies.flatten() {
+                    let _ = std::fs::remove_file(tmp);
                 }
                 return Err(e);
             }
