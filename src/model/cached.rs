@@ -154,8 +154,11 @@ pub(super) fn lookup(
 pub(super) struct Built<'a> {
     pub sizes: &'a Sizes,
     pub ordering: Vec<usize>,
-    /// The assembled stiffness (its pattern is stored).
+    /// The assembled stiffness's pattern (stored for a model without contact; a contact
+    /// model's is not needed and may have been freed).
     pub k: UpperCsc,
+    /// Nonzeros of the assembled stiffness.
+    pub nnz: usize,
     pub grounded: &'a [usize],
     pub condensed: &'a Condensed,
     pub w: Option<&'a faer::Mat<f64>>,
@@ -173,7 +176,7 @@ pub(super) fn entry(b: Built) -> Entry {
         s.n_interior as u64,
         s.n_retained as u64,
         s.m as u64,
-        b.k.row_idx.len() as u64,
+        b.nnz as u64,
         b.condensed.krr_scale.to_bits(),
     ];
     // A contact model's factor: its leading block only (what the solves with K̂ read; the
