@@ -1083,6 +1083,22 @@ impl Drop for Job {
 mod tests {
     use super::*;
 
+    /// The bytes of `w` as written (its own memory where it can) and converted word by word.
+    fn both_ways(w: &Words) -> (Vec<u8>, Vec<u8>) {
+        let (mut direct, mut converted) = (Vec::new(), Vec::new());
+        w.for_each_chunk(|b| {
+            direct.extend_from_slice(b);
+            Ok(())
+        })
+        .unwrap();
+        w.for_each_converted_chunk(|b| {
+            converted.extend_from_slice(b);
+            Ok(())
+        })
+        .unwrap();
+        (direct, converted)
+    }
+
     #[test]
     fn the_bytes_of_words_are_their_little_endian_bytes() {
         let n = CHUNK / 8 + 5; // more than a chunk
@@ -1106,17 +1122,7 @@ mod tests {
             }),
         ] {
             assert_eq!(w.len(), n);
-            let (mut direct, mut converted) = (Vec::new(), Vec::new());
-            w.for_each_chunk(|b| {
-                direct.extend_from_slice(b);
-                Ok(())
-            })
-            .unwrap();
-            w.for_each_converted_chunk(|b| {
-                converted.extend_from_slice(b);
-                Ok(())
-            })
-            .unwrap();
+            let (direct, converted) = both_ways(&w);
             assert_eq!(direct.len(), 8 * n);
             assert!(direct == converted);
         }
@@ -1130,17 +1136,7 @@ mod tests {
             .flat_map(|&(a, len)| f[a..a + len].iter().flat_map(|x| x.to_le_bytes()))
             .collect();
         let w = Words::Gathered(shared, ranges);
-        let (mut direct, mut converted) = (Vec::new(), Vec::new());
-        w.for_each_chunk(|b| {
-            direct.extend_from_slice(b);
-            Ok(())
-        })
-        .unwrap();
-        w.for_each_converted_chunk(|b| {
-            converted.extend_from_slice(b);
-            Ok(())
-        })
-        .unwrap();
+        let (direct, converted) = both_ways(&w);
         assert_eq!(8 * w.len(), expected.len());
         assert!(direct == expected && converted == expected);
     }

@@ -121,13 +121,8 @@ fn write_error_stops_the_run_with_the_earlier_steps_kept() {
         err.contains("case_0003.vtu") && err.contains("cannot write output"),
         "{err}"
     );
-    let mut files: Vec<String> = std::fs::read_dir(&out)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
-        .collect();
-    files.sort();
     assert_eq!(
-        files,
+        file_names(&out),
         [
             "case.pvd",
             "case_0001.vtu",

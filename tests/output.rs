@@ -362,11 +362,7 @@ fn a_failed_step_of_a_batch_leaves_no_file_of_the_steps_after_it() {
     let mut series = Series::new(&model, &dir, "case", false);
     let err = series.write(vec![step(3), step(4), step(5)]).unwrap_err();
     assert!(err.to_string().contains("case_0003.vtu"), "{err}");
-    let files: Vec<String> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
-        .collect();
-    assert_eq!(files, ["case_0003.vtu"]);
+    assert_eq!(common::file_names(&dir), ["case_0003.vtu"]);
     assert!(dir.join("case_0003.vtu").is_dir());
     // A later step of the batch that fails: the steps before it are whole (with their `.pvd`),
     // the failed one keeps what was in its place, and a file of a step after it left by an
@@ -377,13 +373,8 @@ fn a_failed_step_of_a_batch_leaves_no_file_of_the_steps_after_it() {
     let mut series = Series::new(&model, &later, "case", false);
     let err = series.write(vec![step(3), step(4), step(5)]).unwrap_err();
     assert!(err.to_string().contains("case_0004.vtu"), "{err}");
-    let mut files: Vec<String> = std::fs::read_dir(&later)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
-        .collect();
-    files.sort();
     assert_eq!(
-        files,
+        common::file_names(&later),
         [
             "case.pvd",
             "case_0003.vtu",

@@ -305,20 +305,20 @@ fn scan_slave(
     // The gaps of each edge's three samples, found in parallel and merged in edge order (the
     // result does not depend on the threads).
     use rayon::prelude::*;
-    let sampled: Vec<[Option<Sample>; 3]> = slave
+    // Per edge: its chord and its samples.
+    let sampled: Vec<(f64, [Option<Sample>; 3])> = slave
         .par_iter()
         .map_init(Vec::new, |near, e| {
             let xs = e.map(|k| mesh.nodes[k]);
             let h = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
-            [-1.0, 0.0, 1.0].map(|s| {
+            let found = [-1.0, 0.0, 1.0].map(|s| {
                 let (x, n, _, _) = mortar::frame(&xs, s);
                 point_gap(&index, x, n, 10.0 * (candidate_gap + h), near).map(|g| (g, n, x))
-            })
+            });
+            (h, found)
         })
         .collect();
-    for (i, (e, found)) in slave.iter().zip(&sampled).enumerate() {
-        let xs = e.map(|k| mesh.nodes[k]);
-        let h = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
+    for (i, (h, found)) in sampled.into_iter().enumerate() {
         let mut in_zone = false;
         let mut edge_gap: f64 = 0.0;
         for &(g, n, x) in found.iter().flatten() {

@@ -218,7 +218,7 @@ pub fn build(
     // The segments of each slave edge (the search and projections) in parallel; the sums
     // below add them in edge order, so the operator does not depend on the threads.
     use rayon::prelude::*;
-    let found: Vec<(Vec<Segment>, usize)> = slave
+    let found: Vec<(SlaveEdge, Vec<Segment>, usize)> = slave
         .par_iter()
         .map_init(Vec::new, |near, se| {
             let xs = coords(se);
@@ -249,18 +249,16 @@ pub fn build(
                     segments.push((s_lo, s_hi, mi));
                 }
             }
-            (segments, lost)
+            let edge = SlaveEdge {
+                nodes: se,
+                xs,
+                chord,
+            };
+            (edge, segments, lost)
         })
         .collect();
     let mut coverage = Vec::with_capacity(slave.len());
-    for (se, (segments, lost)) in slave.iter().zip(found) {
-        let xs = coords(se);
-        let chord = (xs[0][0] - xs[1][0]).hypot(xs[0][1] - xs[1][1]);
-        let edge = SlaveEdge {
-            nodes: se,
-            xs,
-            chord,
-        };
+    for (edge, segments, lost) in found {
         sums.lost_points += lost;
         coverage.push(segments.iter().map(|(lo, hi, _)| hi - lo).sum::<f64>());
         for (s_lo, s_hi, mi) in segments {
