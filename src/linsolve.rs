@@ -997,13 +997,15 @@ impl SaddleFactor {
         {
             return None;
         }
-        // B = L D (lower), W = −B Lᵀ, lower half, then mirrored.
-        let mut b = l.clone();
+        // One array holds both operands of W = −B Lᵀ: B = L D in its lower half (D on the
+        // diagonal) and Lᵀ in its strict upper half, which the product reads as unit upper
+        // triangular (a copy of L for B would cost another m × m array: 130 MB at L7).
         for j in 0..m {
             let d = l[(j, j)];
-            b[(j, j)] = d;
             for i in j + 1..m {
-                b[(i, j)] *= d;
+                let v = l[(i, j)];
+                l[(j, i)] = v;
+                l[(i, j)] = v * d;
             }
         }
         let mut w = faer::Mat::<f64>::zeros(m, m);
@@ -1011,9 +1013,9 @@ impl SaddleFactor {
             w.as_mut(),
             BlockStructure::TriangularLower,
             faer::Accum::Replace,
-            b.as_ref(),
+            l.as_ref(),
             BlockStructure::TriangularLower,
-            l.transpose(),
+            l.as_ref(),
             BlockStructure::UnitTriangularUpper,
             -1.0,
             factor_parallelism(),

@@ -4,6 +4,8 @@
 
 use super::{NewtonRows, SpecialRow};
 use faer::Mat;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::{factor as llt_factor, solve as llt_solve};
 use faer::linalg::solvers::Solve;
 use std::sync::Arc;
 use std::time::Instant;
@@ -100,7 +102,8 @@ pub struct SolveTimings {
 /// A factorised Delassus block `K = W[unk, unk]`: its Cholesky factor, and the rows of `W`
 /// outside it with `W[out_rows, unk]`, contiguous for the product of every iteration.
 pub struct Block {
-    llt: faer::linalg::solvers::Llt<f64>,
+    /// The lower Cholesky factor `L` of `K = L Lᵀ` (its strictly upper part is zero).
+    l: Mat<f64>,
     out_rows: Vec<usize>,
     w_out: Mat<f64>,
 }
@@ -112,12 +115,28 @@ impl Block {
         // worker waiting inside a parallel factorisation could otherwise take up another row
         // that waits on this very block in [`BlockStore::get`].
         debug_assert!(matches!(faer::get_global_parallelism(), faer::Par::Seq));
-        let k = Mat::from_fn(unk.len(), unk.len(), |i, j| w[(unk[i], unk[j])]);
-        let llt = k.llt(faer::Side::Lower).ok()?;
+        // Factorised in place from the lower half of K (faer's `Llt` would copy K into a
+        // second array of the same size first: 87 MB at L7, in fresh memory).
+        let n = unk.len();
+        let mut l = Mat::from_fn(n, n, |i, j| if i >= j { w[(unk[i], unk[j])] } else { 0.0 });
+        let par = faer::Par::Seq;
+        let mut mem = MemBuffer::new(llt_factor::cholesky_in_place_scratch::<f64>(
+            n,
+            par,
+            Default::default(),
+        ));
+        llt_factor::cholesky_in_place(
+            l.as_mut(),
+            Default::default(),
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .ok()?;
         // The pivots are L_ii²: as for an LU, singular when the smallest is below 1e-12 of the
         // largest; and pivots within 2^52 of the smallest normal number have lost digits to
         // underflow (absurd moduli make W that small).
-        let pivots: Vec<f64> = (0..unk.len()).map(|i| llt.L()[(i, i)].powi(2)).collect();
+        let pivots: Vec<f64> = (0..n).map(|i| l[(i, i)].powi(2)).collect();
         let lo = pivots.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = pivots.iter().copied().fold(0.0, f64::max);
         if lo <= 1e-12 * hi || lo < f64::MIN_POSITIVE / f64::EPSILON {
@@ -127,11 +146,25 @@ impl Block {
         unk.iter().for_each(|&u| inside[u] = true);
         let out_rows: Vec<usize> = (0..w.nrows()).filter(|&i| !inside[i]).collect();
         let w_out = Mat::from_fn(out_rows.len(), unk.len(), |r, q| w[(out_rows[r], unk[q])]);
-        Some(Block {
-            llt,
-            out_rows,
-            w_out,
-        })
+        Some(Block { l, out_rows, w_out })
+    }
+
+    /// Solves `K X = B` in place for the columns of `b` (sequential, as `Llt::solve_in_place`
+    /// with faer's global parallelism: the same arithmetic).
+    fn solve_in_place(&self, b: &mut Mat<f64>) {
+        let par = faer::Par::Seq;
+        let mut mem = MemBuffer::new(llt_solve::solve_in_place_scratch::<f64>(
+            self.l.nrows(),
+            b.ncols(),
+            par,
+        ));
+        llt_solve::solve_in_place_with_conj(
+            self.l.as_ref(),
+            faer::Conj::No,
+            b.as_mut(),
+            par,
+            MemStack::new(&mut mem),
+        );
     }
 }
 
@@ -345,9 +378,9 @@ impl LuCache {
             && self.xt.len() == nk
             && (0..nk).all(|q| is_special[q] || b[q].to_bits() == self.bt[q].to_bits());
         if !reuse {
-            let llt = &self.k_llt.as_ref()?.llt;
+            let block = self.k_llt.as_ref()?;
             let mut x0 = Mat::from_fn(nk, 1, |i, _| b[i]);
-            llt.solve_in_place(&mut x0);
+            block.solve_in_place(&mut x0);
             self.bt = b.clone();
             self.xt = x0.col(0).iter().copied().collect();
         }
@@ -437,13 +470,13 @@ impl LuCache {
     /// Solves for the columns `G = K⁻¹ e_q` at positions `qs` in one solve with several
     /// right-hand sides, and records the batch; `None` if `K` is not factorised.
     fn solve_columns(&mut self, qs: Vec<usize>) -> Option<()> {
-        let llt = &self.k_llt.as_ref()?.llt;
+        let block = self.k_llt.as_ref()?;
         let nk = self.k_unk.len();
         let mut e = Mat::<f64>::zeros(nk, qs.len());
         for (c, &q) in qs.iter().enumerate() {
             e[(q, c)] = 1.0;
         }
-        llt.solve_in_place(&mut e);
+        block.solve_in_place(&mut e);
         for (c, &q) in qs.iter().enumerate() {
             self.k_cols[q] = e.col(c).iter().copied().collect();
         }
