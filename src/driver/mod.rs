@@ -432,12 +432,12 @@ impl Driver<'_> {
                 last_update: 0.0,
             })
         } else {
-            let guess = older
+            let t = older
                 .as_ref()
                 .filter(|(a0, _)| *a0 >= 0.0)
-                .map(|(a_old, old)| {
-                    predict(prev, old, (a_new - alpha) / (alpha - a_old).max(1e-300))
-                });
+                .map(|(a_old, old)| (old, (a_new - alpha) / (alpha - a_old).max(1e-300)));
+            let guess = t.map(|(old, t)| predict(prev, old, t));
+            self.lu_cache.predict_with(t.map(|(_, t)| t));
             self.model.solve_contact_step(
                 StepLoad {
                     scale,

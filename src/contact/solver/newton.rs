@@ -216,8 +216,18 @@ impl ContactSystem {
         let mut w_mu: Option<Vec<f64>> = None;
         let mut guard = Guard::new(opt.verbose);
         for it in 1..=opt.max_iterations {
-            let y: Vec<f64> = match w_mu.take() {
-                Some(w_mu) => w0.iter().zip(&w_mu).map(|(a, b)| a + b).collect(),
+            // `y` and, with the shortcuts, `W μ` itself (kept once the step converges).
+            let plus_w0 =
+                |p: &[f64]| -> Vec<f64> { w0.iter().zip(p).map(|(a, b)| a + b).collect() };
+            let recalled = match w_mu.take() {
+                Some(p) => Some(p),
+                None if !exact => cache
+                    .as_deref_mut()
+                    .and_then(|c| c.recall_w_mu(&mu, &self.w)),
+                None => None,
+            };
+            let y: Vec<f64> = match &recalled {
+                Some(p) => plus_w0(p),
                 None => self.y(w0, &mu),
             };
             // Sets from the current iterate (without a guess, the first iteration keeps the
@@ -263,6 +273,11 @@ impl ContactSystem {
                         // product by the solve's error, which near a force-controlled peak
                         // was enough to move the bracketed Q_max (L3, `tests/sweep.rs`).
                         let y = if exact { self.y(w0, &mu) } else { y };
+                        if let (Some(c), Some(p)) = (cache.as_deref_mut(), recalled)
+                            && !exact
+                        {
+                            c.remember_w_mu(mu.clone(), p);
+                        }
                         return Ok(self.finish(
                             &y,
                             &mu,
