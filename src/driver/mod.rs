@@ -568,6 +568,7 @@ fn predict(prev: &State, old: &State, t: f64) -> State {
         c.iter().zip(o).map(|(c, o)| c + t * (c - o)).collect()
     };
     let mut g = prev.clone();
+    g.status = solver::predict_slip(prev, old, t);
     g.f_n = ext(&prev.f_n, &old.f_n)
         .into_iter()
         .map(|v| v.max(0.0))

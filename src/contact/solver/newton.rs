@@ -93,6 +93,45 @@ impl ContactSystem {
             opt,
             cache.as_deref_mut(),
         );
+        // Predicted slip ([`super::predict_slip`]) that did not converge, or converged with
+        // far more nodes slipping than predicted: with a softening law the start can lead the
+        // iteration to another equilibrium (L6, force-controlled to Q = f_d P: every node
+        // slipping at f_d instead of the stick zone that holds). The step again from the
+        // forces alone, as without the prediction.
+        let newly = |st: &[Status]| {
+            (0..self.ns)
+                .filter(|&j| st[j] == Status::Slip && prev.status[j] == Status::Stick)
+                .count()
+        };
+        let predicted = guess.map_or(0, |g| newly(&g.status));
+        let jumped = |out: &StepOutcome| newly(&out.state.status) > 2 * predicted + 4;
+        let plain;
+        let (first, guess) = if predicted > 0 && first.as_ref().map_or(true, jumped) {
+            if opt.verbose {
+                eprintln!(
+                    "    not converged from the predicted slip of {predicted} nodes, or far past it: from the forces alone"
+                );
+            }
+            plain = guess.map(|g| State {
+                status: prev.status.clone(),
+                ..g.clone()
+            });
+            if let Some(c) = cache.as_deref_mut() {
+                c.forget_direct();
+            }
+            let again = self.solve_step_with(
+                w0,
+                drive,
+                law,
+                prev,
+                (plain.as_ref(), None),
+                opt,
+                cache.as_deref_mut(),
+            );
+            (again, plain.as_ref())
+        } else {
+            (first, guess)
+        };
         match (first, cache) {
             (Err(_), Some(c)) if fast => {
                 c.exact = true;
@@ -243,6 +282,19 @@ impl ContactSystem {
                     fbar_t: &fbar_t,
                 };
                 let mut changes = self.update_sets(&trial, &y, &mut status, &mut sign);
+                // The first iteration from a guess: the stick nodes it predicts to slip (the
+                // slip fronts moving on) slip unless the update took them out of contact.
+                if !solved && let Some(g) = guess {
+                    for j in 0..ns {
+                        if g.status[j] == Status::Slip
+                            && prev.status[j] == Status::Stick
+                            && status[j] == Status::Stick
+                        {
+                            status[j] = Status::Slip;
+                            changes += 1;
+                        }
+                    }
+                }
                 // A force-driven pilot body that only the contact holds has no equilibrium with
                 // every node open (the system is singular): an iterate that opens them all
                 // overshot, so the closest nodes close again, as at the start of a step.
