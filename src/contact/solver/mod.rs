@@ -335,3 +335,75 @@ impl ContactSystem {
         w0[i] + (0..mu.len()).map(|j| col[j] * mu[j]).sum::<f64>()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A state with the statuses given by a string: `o` open, `t` stick, `s` slip.
+    fn state(s: &str) -> State {
+        let status: Vec<Status> = s
+            .chars()
+            .map(|c| match c {
+                'o' => Status::Open,
+                't' => Status::Stick,
+                _ => Status::Slip,
+            })
+            .collect();
+        let n = status.len();
+        State {
+            f_n: vec![0.0; n],
+            f_t: vec![0.0; n],
+            z: Vec::new(),
+            v: vec![0.0; n],
+            slip: vec![0.0; n],
+            slip_mu: vec![0.0; n],
+            dv: vec![0.0; n],
+            gap: vec![0.0; n],
+            status,
+            mu: vec![0.0; n],
+            pilot_u: [0.0; 2],
+            pilot_f: [0.0; 2],
+            mean_slip: 0.0,
+        }
+    }
+
+    fn as_text(st: &[Status]) -> String {
+        st.iter()
+            .map(|s| match s {
+                Status::Open => 'o',
+                Status::Stick => 't',
+                Status::Slip => 's',
+            })
+            .collect()
+    }
+
+    #[test]
+    fn slip_fronts_are_predicted_to_move_on_as_they_moved() {
+        // Both fronts moved two nodes inwards: predicted two further (t = 1), one (t = 0.5).
+        let old = state("ossttttttttttttsso");
+        let prev = state("ossssttttttttsssso");
+        assert_eq!(
+            as_text(&predict_slip(&prev, &old, 1.0)),
+            "ossssssttttsssssso"
+        );
+        assert_eq!(
+            as_text(&predict_slip(&prev, &old, 0.5)),
+            "osssssttttttssssso"
+        );
+        // A front that stood still, or none before: no prediction.
+        assert_eq!(
+            as_text(&predict_slip(&prev, &prev, 1.0)),
+            "ossssttttttttsssso"
+        );
+        let none = state("otttttttttttttttto");
+        assert_eq!(
+            as_text(&predict_slip(&prev, &none, 1.0)),
+            "ossssttttttttsssso"
+        );
+        // Nodes that re-stick are left to the iteration.
+        let old = state("osssstttsssso");
+        let prev = state("otttttttttsso");
+        assert_eq!(as_text(&predict_slip(&prev, &old, 1.0)), "otttttttttsso");
+    }
+}
