@@ -129,12 +129,17 @@ fn point_gap(
     reach: f64,
     near: &mut Vec<usize>,
 ) -> Option<f64> {
-    // Every edge that passes `within_reach` has its box within this distance of `x`.
-    let r = (reach + 1e-6 * (reach + x[0].abs() + x[1].abs() + 2.0 * master.grid.max_side()))
-        * (1.0 + 1e-9);
-    master
-        .grid
-        .query(&([x[0] - r, x[1] - r], [x[0] + r, x[1] + r]), near);
+    // A hit `x + g n` with |g| ≤ reach lies on its edge, within the edge's control box: the
+    // box comes within round-off of the segment of the normal line out to `reach` (the margin
+    // is far above it, and above the 1e-9 of the parameter range `R_MAX` allows past the ends).
+    let nn = n[0].hypot(n[1]);
+    let margin = 1e-6 * (reach * nn + x[0].abs() + x[1].abs() + 2.0 * master.grid.max_side());
+    master.grid.query_segment(
+        [x[0] - reach * n[0], x[1] - reach * n[1]],
+        [x[0] + reach * n[0], x[1] + reach * n[1]],
+        margin,
+        near,
+    );
     let mut best: Option<f64> = None;
     for &i in near.iter() {
         let xm = &master.coords[i];

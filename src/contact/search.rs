@@ -159,6 +159,64 @@ impl EdgeGrid {
         out.sort_unstable();
         out.dedup();
     }
+
+    /// The edges whose cells overlap the segment from `a` to `b` widened by `margin` on every
+    /// side (a superset of those whose box comes within `margin` of the segment), in
+    /// increasing order, into `out` (cleared first). The segment is covered by pieces no
+    /// longer than a cell, each queried by its box: a normal line through a fine face meets a
+    /// few cells where the square around its reach holds hundreds of edges.
+    pub fn query_segment(&self, a: [f64; 2], b: [f64; 2], margin: f64, out: &mut Vec<usize>) {
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        let pieces = (len / self.cell).ceil();
+        if !(pieces.is_finite() && margin.is_finite() && margin >= 0.0)
+            || pieces > (self.nx + self.ny) as f64
+        {
+            // A grid of one cell, a segment that crosses most of the grid, or bad input: the
+            // segment's box.
+            let q = (
+                [a[0].min(b[0]) - margin, a[1].min(b[1]) - margin],
+                [a[0].max(b[0]) + margin, a[1].max(b[1]) + margin],
+            );
+            return self.query(&q, out);
+        }
+        out.clear();
+        let k = (pieces as usize).max(1);
+        let at = |i: usize| {
+            let t = i as f64 / k as f64;
+            [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
+        };
+        let mut last: Option<((usize, usize), (usize, usize))> = None;
+        for i in 0..k {
+            let (p, q) = (
+                if i == 0 { a } else { at(i) },
+                if i + 1 == k { b } else { at(i + 1) },
+            );
+            let piece = (
+                [p[0].min(q[0]) - margin, p[1].min(q[1]) - margin],
+                [p[0].max(q[0]) + margin, p[1].max(q[1]) + margin],
+            );
+            let (ix, iy) = self.span(&piece);
+            for y in iy.0..=iy.1 {
+                for x in ix.0..=ix.1 {
+                    // The cells of the last piece were taken already.
+                    if last.is_some_and(|(lx, ly)| {
+                        (lx.0..=lx.1).contains(&x) && (ly.0..=ly.1).contains(&y)
+                    }) {
+                        continue;
+                    }
+                    let c = y * self.nx + x;
+                    out.extend(
+                        self.items[self.start[c]..self.start[c + 1]]
+                            .iter()
+                            .map(|&e| e as usize),
+                    );
+                }
+            }
+            last = Some((ix, iy));
+        }
+        out.sort_unstable();
+        out.dedup();
+    }
 }
 
 #[cfg(test)]
@@ -220,6 +278,41 @@ mod tests {
                     assert!(
                         out.binary_search(&i).is_ok(),
                         "box {i} meets query {k} but is missing"
+                    );
+                }
+            }
+        }
+        // Segments: every box within the margin of one is returned.
+        let near_segment = |bx: &Aabb, a: [f64; 2], b: [f64; 2], m: f64| {
+            // The distance from the segment to the box, by sampling the segment finely
+            // (an overestimate by at most half a sample step).
+            let steps = 2000;
+            (0..=steps).any(|i| {
+                let t = i as f64 / steps as f64;
+                let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+                let dx = (bx.0[0] - p[0]).max(p[0] - bx.1[0]).max(0.0);
+                let dy = (bx.0[1] - p[1]).max(p[1] - bx.1[1]).max(0.0);
+                dx.hypot(dy) <= m
+            })
+        };
+        for k in 0..300 {
+            let a = [rng(&mut seed) * 5.0 - 2.5, rng(&mut seed) * 5.0 - 2.5];
+            let (th, l) = (
+                rng(&mut seed) * 6.3,
+                rng(&mut seed) * if k % 10 == 0 { 6.0 } else { 0.4 },
+            );
+            let b = [a[0] + l * th.cos(), a[1] + l * th.sin()];
+            let m = rng(&mut seed) * 0.02;
+            grid.query_segment(a, b, m, &mut out);
+            assert!(
+                out.windows(2).all(|w| w[0] < w[1]),
+                "increasing, no repeats"
+            );
+            for (i, bx) in boxes.iter().enumerate() {
+                if near_segment(bx, a, b, m) {
+                    assert!(
+                        out.binary_search(&i).is_ok(),
+                        "box {i} near segment {k} but missing"
                     );
                 }
             }
