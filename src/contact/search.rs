@@ -185,7 +185,6 @@ impl EdgeGrid {
             let t = i as f64 / k as f64;
             [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
         };
-        let mut last: Option<((usize, usize), (usize, usize))> = None;
         for i in 0..k {
             let (p, q) = (
                 if i == 0 { a } else { at(i) },
@@ -195,15 +194,10 @@ impl EdgeGrid {
                 [p[0].min(q[0]) - margin, p[1].min(q[1]) - margin],
                 [p[0].max(q[0]) + margin, p[1].max(q[1]) + margin],
             );
+            // Cells shared with the neighbouring pieces give repeats, removed below.
             let (ix, iy) = self.span(&piece);
             for y in iy.0..=iy.1 {
                 for x in ix.0..=ix.1 {
-                    // The cells of the last piece were taken already.
-                    if last.is_some_and(|(lx, ly)| {
-                        (lx.0..=lx.1).contains(&x) && (ly.0..=ly.1).contains(&y)
-                    }) {
-                        continue;
-                    }
                     let c = y * self.nx + x;
                     out.extend(
                         self.items[self.start[c]..self.start[c + 1]]
@@ -212,7 +206,6 @@ impl EdgeGrid {
                     );
                 }
             }
-            last = Some((ix, iy));
         }
         out.sort_unstable();
         out.dedup();
