@@ -33,7 +33,7 @@ use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 /// Version of the file format and of the meaning of the sections. Bump it when either changes.
-pub const FORMAT: u32 = 2;
+pub const FORMAT: u32 = 3;
 const MAGIC: [u8; 8] = *b"stkslpMC";
 /// Default size cap of the cache directory.
 pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;

@@ -958,10 +958,14 @@ impl SaddleFactor {
         self.solve_block_in_place(b, 1);
     }
 
-    /// The Delassus operator `W = Y K̂⁻¹ Yᵀ = −L_MM D_MM L_MMᵀ` (dense, `m × m`), or `None`
-    /// when a pivot of the constraint block is not negative (`Y` is rank-deficient, or `W` is
-    /// too ill-conditioned for the unpivoted factorisation to be trusted).
-    pub fn delassus(&self) -> Option<faer::Mat<f64>> {
+    /// The Delassus operator `W = Y K̂⁻¹ Yᵀ = −L_MM D_MM L_MMᵀ` (dense, `m × m`, in the order
+    /// of the constraint rows), or `None` when a pivot of the constraint block is not negative
+    /// (`Y` is rank-deficient, or `W` is too ill-conditioned for the unpivoted factorisation
+    /// to be trusted). With `keep_factor`, also `C = L_MM (−D_MM)^½`, a lower Cholesky factor
+    /// of `W` (`W = C Cᵀ`, its strictly upper part zero): the leading `p × p` block of `C` is
+    /// the Cholesky factor of the leading block `W[..p, ..p]`, for every `p`, with no
+    /// factorisation (see `contact::PrefixFactor`).
+    pub fn delassus(&self, keep_factor: bool) -> Option<(faer::Mat<f64>, Option<faer::Mat<f64>>)> {
         use faer::linalg::matmul::triangular::{BlockStructure, matmul};
         let (n, m) = (self.n, self.m);
         // A factor restored from a model-cache entry keeps its leading block only
@@ -1025,7 +1029,32 @@ impl SaddleFactor {
                 w[(j, i)] = w[(i, j)];
             }
         }
-        Some(w)
+        if !keep_factor {
+            return Some((w, None));
+        }
+        // C from the same array: column j of L (unit diagonal) is the strict upper half's row
+        // j, scaled by (−d_j)^½ (in tiles, so that the transposed reads stay in cache); the
+        // strict upper half is cleared.
+        let s: Vec<f64> = (0..m).map(|j| (-l[(j, j)]).sqrt()).collect();
+        const TILE: usize = 64;
+        for jb in (0..m).step_by(TILE) {
+            for ib in (jb..m).step_by(TILE) {
+                for j in jb..(jb + TILE).min(m) {
+                    for i in (j + 1).max(ib)..(ib + TILE).min(m) {
+                        l[(i, j)] = l[(j, i)] * s[j];
+                    }
+                }
+            }
+        }
+        for (j, &sj) in s.iter().enumerate() {
+            l[(j, j)] = sj;
+        }
+        for j in 1..m {
+            for i in 0..j {
+                l[(i, j)] = 0.0;
+            }
+        }
+        Some((w, Some(l)))
     }
 }
 
@@ -1050,6 +1079,53 @@ mod tests {
         }
         let y = vec![vec![(3, 1.0), (4, -1.0)], vec![(n - 1, 1.0)]];
         (col_ptr, row_idx, values, y)
+    }
+
+    #[test]
+    fn the_constraint_block_gives_the_delassus_operator_and_its_cholesky_factor() {
+        let n = 40;
+        let (cp, ri, kv, _) = small_saddle(n);
+        // Six constraint rows that overlap (W dense), as contact rows do.
+        let y: Rows = (0..6)
+            .map(|k| {
+                vec![
+                    (5 * k + 2, 1.0),
+                    (5 * k + 3, -0.5),
+                    (20 + k, 0.3 + 0.1 * k as f64),
+                ]
+            })
+            .collect();
+        let m = y.len();
+        let sym = SaddleSymbolic::analyse(n, &cp, &ri, &y).unwrap();
+        let f = sym.factorise(&kv, &y).unwrap();
+        // W by solves: W_ij = y_i · K̂⁻¹ y_j.
+        let solved: Vec<Vec<f64>> = y
+            .iter()
+            .map(|row| {
+                let mut x = vec![0.0; n];
+                row.iter().for_each(|&(r, v)| x[r] += v);
+                f.solve_in_place(&mut x);
+                x
+            })
+            .collect();
+        let w_ref =
+            |i: usize, j: usize| -> f64 { y[i].iter().map(|&(r, v)| v * solved[j][r]).sum() };
+        let (w, c) = f.delassus(true).unwrap();
+        let c = c.expect("kept");
+        let (w_alone, none) = f.delassus(false).unwrap();
+        assert!(none.is_none());
+        let wmax = (0..m).map(|i| w_ref(i, i).abs()).fold(0.0, f64::max);
+        for i in 0..m {
+            for j in 0..m {
+                assert!((w[(i, j)] - w_ref(i, j)).abs() < 1e-13 * wmax, "W[{i},{j}]");
+                assert_eq!(w[(i, j)].to_bits(), w_alone[(i, j)].to_bits());
+                let cct: f64 = (0..m).map(|k| c[(i, k)] * c[(j, k)]).sum();
+                assert!((cct - w[(i, j)]).abs() < 1e-13 * wmax, "C Cᵀ[{i},{j}]");
+                if j > i {
+                    assert_eq!(c[(i, j)], 0.0, "C is lower triangular");
+                }
+            }
+        }
     }
 
     #[test]

@@ -27,6 +27,7 @@ fn system(ns: usize, w: &[f64], gap0: &[f64]) -> ContactSystem {
         weight: vec![1.0 / ns as f64; ns],
         slip_orient: 1.0,
         floating_pilot: false,
+        prefix: None,
     }
 }
 

@@ -636,7 +636,9 @@ fn structured_newton_solve_matches_the_dense_system() {
             slip_control,
             "{case}: slip-control row"
         );
-        let (x, w_mu) = cache.solve_rows(&cm.system.w, &rows, false).unwrap();
+        let (x, w_mu) = cache
+            .solve_rows(&cm.system.w, cm.system.prefix.as_ref(), &rows, false)
+            .unwrap();
         let dense = faer::linalg::solvers::Solve::solve(&sys.a.partial_piv_lu(), &sys.b);
         let xmax = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let diff = (0..x.len())
@@ -789,5 +791,96 @@ fn first_contact_from_the_frictionless_set_gives_the_same_step() {
         // force of each node in contact, the pilot's two), not every candidate's.
         assert_eq!(block_a, 2 * in_contact + 2, "{name}");
         assert!(block_b > block_a, "{name}: {block_b} vs {block_a}");
+    }
+}
+
+/// Delassus blocks read from the Cholesky factor of `W` in the order of the initial gaps
+/// (`PrefixFactor`: on L6 up the saddle-point factorisation gives it) instead of factorised
+/// give the same steps. Fig. 2 on L4 (identical bodies and a steel–copper pair), normal load
+/// then five tangential steps of growing size (those the driver takes for the pair, which
+/// cuts the first step of 0.15 back three times) under a ramp law, solved with the model as built (every block factorised) and
+/// with a prefix factor computed here independently (faer's dense Cholesky of
+/// `W[order, order]`): the same contact sets and forces within 1e-9 of the largest, and the
+/// stick blocks taken from the prefix factor.
+#[test]
+fn delassus_blocks_from_the_prefix_factor_give_the_same_steps() {
+    use stickslip::case::Control;
+    use stickslip::contact::solver::{LuCache, PrefixFactor, prefix_order};
+    use stickslip::friction::FrictionLaw;
+    use stickslip::model::StepLoad;
+    let law = FrictionLaw::ramp(0.15, 0.1, 0.05).unwrap();
+    for (name, lower, upper) in [
+        ("identical", (200.0, 0.3), (200.0, 0.3)),
+        ("steel on copper", (207.0, 0.3), (110.0, 0.34)),
+    ] {
+        let mut v = shipped_case_on("fig2.json", "vm272_L4.msh");
+        v["bodies"][0]["E"] = json!(lower.0);
+        v["bodies"][0]["nu"] = json!(lower.1);
+        v["bodies"][1]["E"] = json!(upper.0);
+        v["bodies"][1]["nu"] = json!(upper.1);
+        let case: stickslip::case::Case = serde_json::from_value(v).unwrap();
+        let mut model =
+            stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap();
+        let (_, mut opt) = fig2_on_l1();
+        opt.tolerance = 1e-10;
+        let cm = model.contact.as_ref().unwrap();
+        assert!(
+            cm.system.prefix.is_none(),
+            "{name}: L4 is below PREFIX_FROM"
+        );
+        let m = cm.system.w.nrows();
+        let order = prefix_order(&cm.system.gap0, m);
+        let wo = faer::Mat::from_fn(m, m, |i, j| cm.system.w[(order[i], order[j])]);
+        let llt = wo.llt(faer::Side::Lower).expect("W is positive definite");
+        let c = llt.L().to_owned();
+        let prefix = std::sync::Arc::new(PrefixFactor::new(c, order));
+        let mut run = |prefix: Option<std::sync::Arc<PrefixFactor>>| {
+            model.contact.as_mut().unwrap().system.prefix = prefix;
+            let mut cache = LuCache::default();
+            let mut st = model.contact.as_ref().unwrap().system.initial_state();
+            let mut states = Vec::new();
+            for q in [0.0, 0.01875, 0.05625, 0.13125, 0.28125, 0.43125] {
+                st = model
+                    .solve_contact_step(
+                        StepLoad {
+                            scale: 0.0,
+                            control: [Control::Force(q), Control::Force(-10.0)],
+                        },
+                        &st,
+                        None,
+                        &opt,
+                        Some(&law),
+                        Some(&mut cache),
+                    )
+                    .unwrap_or_else(|e| panic!("{name}: Q = {q}: {e}"))
+                    .state;
+                states.push(st.clone());
+            }
+            (states, cache.factorisations, cache.prefix_blocks)
+        };
+        let (a, fact_a, taken_a) = run(None);
+        let (b, fact_b, taken_b) = run(Some(prefix));
+        let mut dev = 0.0f64;
+        for (sa, sb) in a.iter().zip(&b) {
+            assert_eq!(sa.status, sb.status, "{name}: the sets differ");
+            let scale = sa.f_n.iter().fold(0.0f64, |m, f| m.max(f.abs()));
+            dev = sa
+                .f_n
+                .iter()
+                .zip(&sb.f_n)
+                .chain(sa.f_t.iter().zip(&sb.f_t))
+                .map(|(x, y)| (x - y).abs() / scale)
+                .fold(dev, f64::max);
+            dev = dev.max((sa.pilot_u[0] - sb.pilot_u[0]).abs() / sa.pilot_u[1].abs());
+        }
+        println!(
+            "{name}: {m} contact unknowns; factorised blocks {fact_a} without the prefix factor, {fact_b} with it and {taken_b} taken from it; forces and pilot displacement differ by {dev:.1e}"
+        );
+        assert!(dev < 1e-9, "{name}: {dev:.2e}");
+        assert_eq!(taken_a, 0, "{name}");
+        assert!(
+            taken_b >= 1 && fact_b < fact_a,
+            "{name}: {fact_b} vs {fact_a}, {taken_b}"
+        );
     }
 }

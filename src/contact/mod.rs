@@ -82,19 +82,32 @@ impl ContactModel {
     /// the last rows of `y`: the Delassus operator `W = Y K̂⁻¹ Yᵀ` from the trailing block of
     /// the saddle-point factorisation, or (when that block is not negative definite to
     /// working precision, a rank-deficient `Y`) by one solve per row.
+    ///
+    /// `order`: the order of the constraint rows in the saddle-point factorisation
+    /// ([`solver::prefix_order`]; `None`: the order of μ). With it, the trailing block also
+    /// gives the Cholesky factor of `W` in that order ([`solver::PrefixFactor`]).
     pub fn new(
         pair: Pair,
         y: ConstraintRows,
         has_pilot: bool,
         cond: &crate::condense::Condensed,
         e_star: f64,
+        order: Option<Vec<usize>>,
     ) -> ContactModel {
-        let w = match &cond.chol {
-            crate::condense::Factor::Saddle(f) => f.delassus(),
+        let (w, prefix) = match &cond.chol {
+            crate::condense::Factor::Saddle(f) => f.delassus(order.is_some()),
             crate::condense::Factor::Partial(_) => None,
         }
-        .unwrap_or_else(|| delassus_by_solves(&y.rows, cond));
-        Self::with_w(pair, y, has_pilot, cond, e_star, w)
+        .map(|(w, c)| match (c, order) {
+            (Some(c), Some(order)) => {
+                let mut w = w;
+                to_mu_order(&mut w, &order);
+                (w, Some(solver::PrefixFactor::new(c, order)))
+            }
+            (_, _) => (w, None),
+        })
+        .unwrap_or_else(|| (delassus_by_solves(&y.rows, cond), None));
+        Self::with_w(pair, y, has_pilot, cond, e_star, w, prefix)
     }
 
     /// As [`ContactModel::new`] with the Delassus operator `w` of an earlier build of the same
@@ -106,6 +119,7 @@ impl ContactModel {
         cond: &crate::condense::Condensed,
         e_star: f64,
         w: faer::Mat<f64>,
+        prefix: Option<solver::PrefixFactor>,
     ) -> ContactModel {
         let m0 = &pair.mortar;
         let ns = m0.slave_nodes.len();
@@ -130,6 +144,7 @@ impl ContactModel {
             weight: m0.weight.clone(),
             slip_orient,
             floating_pilot: false,
+            prefix: prefix.map(std::sync::Arc::new),
         };
         ContactModel {
             pair,
@@ -175,6 +190,51 @@ impl ContactModel {
     }
 }
 
+/// Reorders in place a symmetric `w` given in the order `order` (`w[a, b]` the entry of the
+/// unknowns `order[a]`, `order[b]`) into the natural order of the unknowns: the rows of each
+/// column first, then the columns by the cycles of the permutation (one spare column: the
+/// Delassus operator is 130 MB at L7, and a second copy would raise the run's peak memory).
+fn to_mu_order(w: &mut faer::Mat<f64>, order: &[usize]) {
+    let m = order.len();
+    let mut pos = vec![0; m];
+    for (k, &i) in order.iter().enumerate() {
+        pos[i] = k;
+    }
+    let mut tmp = vec![0.0; m];
+    for j in 0..m {
+        let col = w.col(j);
+        for (t, &p) in tmp.iter_mut().zip(&pos) {
+            *t = col[p];
+        }
+        w.col_mut(j).iter_mut().zip(&tmp).for_each(|(x, t)| *x = *t);
+    }
+    // Column j of the result is column pos[j] of the row-permuted array.
+    let mut done = vec![false; m];
+    for start in 0..m {
+        if done[start] {
+            continue;
+        }
+        tmp.iter_mut()
+            .zip(w.col(start).iter())
+            .for_each(|(t, x)| *t = *x);
+        let mut j = start;
+        loop {
+            done[j] = true;
+            let k = pos[j];
+            if k == start {
+                w.col_mut(j).iter_mut().zip(&tmp).for_each(|(x, t)| *x = *t);
+                break;
+            }
+            let (src, dst) = (k, j);
+            for i in 0..m {
+                let v = w[(i, src)];
+                w[(i, dst)] = v;
+            }
+            j = k;
+        }
+    }
+}
+
 /// `W = Y K̂⁻¹ Yᵀ` by one solve with `K̂` per row of `Y` (a block solve).
 fn delassus_by_solves(
     rows: &[Vec<(usize, f64)>],
@@ -204,4 +264,25 @@ fn delassus_by_solves(
         }
     }
     w
+}
+
+#[cfg(test)]
+mod tests {
+    /// The in-place reordering of a symmetric matrix from an order of its unknowns into theirs,
+    /// against the gathered copy, for a permutation with cycles of several lengths.
+    #[test]
+    fn a_matrix_in_another_order_of_its_unknowns_comes_back_in_theirs() {
+        let m = 9;
+        let order = [4, 0, 8, 2, 1, 3, 7, 6, 5];
+        let natural = faer::Mat::from_fn(m, m, |i, j| {
+            (1 + i.min(j)) as f64 * 10.0 + (i.max(j)) as f64
+        });
+        let mut w = faer::Mat::from_fn(m, m, |a, b| natural[(order[a], order[b])]);
+        super::to_mu_order(&mut w, &order);
+        for i in 0..m {
+            for j in 0..m {
+                assert_eq!(w[(i, j)], natural[(i, j)], "({i}, {j})");
+            }
+        }
+    }
 }

@@ -509,7 +509,8 @@ impl Driver<'_> {
         if let (Some(rec), Some(cm)) = (&c.contact_block, &self.model.contact) {
             // A block that does not factorise leaves the cache empty: the solves still
             // converge, though not bit for bit as the uninterrupted run.
-            self.lu_cache.replay(&cm.system.w, rec);
+            self.lu_cache
+                .replay(&cm.system.w, cm.system.prefix.as_ref(), rec);
         }
         self.bracket = c.bracket;
         self.last_u = c.last_u;

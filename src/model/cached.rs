@@ -41,6 +41,11 @@ mod tag {
     pub const SN_ROW_PTR: u32 = 14;
     pub const SN_ROWS: u32 = 15;
     pub const SN_VAL_PTR: u32 = 16;
+    /// The order of the constraint rows and the packed lower triangle (column by column) of
+    /// the Cholesky factor of `W` in it ([`crate::contact::solver::PrefixFactor`]), for the
+    /// models that have one.
+    pub const PREFIX_ORDER: u32 = 17;
+    pub const PREFIX_C: u32 = 18;
 }
 
 /// `META`: kind, n_free, n_interior, n_retained, m, stiffness nonzeros, bits of `krr_scale`.
@@ -55,6 +60,9 @@ pub(super) struct Sizes {
     pub n_retained: usize,
     /// Constraint rows (0 without contact).
     pub m: usize,
+    /// Their order in the saddle-point factorisation, when it is not that of μ
+    /// ([`crate::contact::solver::prefix_order`]).
+    pub row_order: Option<Vec<usize>>,
 }
 
 /// A cache miss: the entry to write.
@@ -68,6 +76,7 @@ pub(super) struct Pending {
 pub(super) struct Restored {
     pub condensed: Condensed,
     pub w: Option<faer::Mat<f64>>,
+    pub prefix: Option<crate::contact::solver::PrefixFactor>,
     pub f_prescribed: Vec<f64>,
     pub stiffness_nonzeros: usize,
     /// (traction forces, their `w0`, `w0` of the prescribed displacements).
@@ -162,6 +171,7 @@ pub(super) struct Built<'a> {
     pub grounded: &'a [usize],
     pub condensed: &'a Condensed,
     pub w: Option<&'a faer::Mat<f64>>,
+    pub prefix: Option<&'a crate::contact::solver::PrefixFactor>,
     pub f_prescribed: &'a [f64],
     pub f_traction: &'a [f64],
     pub contact_w0: &'a [Vec<f64>; 2],
@@ -208,6 +218,21 @@ pub(super) fn entry(b: Built) -> Entry {
         sections.push((tag::F_TRACTION, Words::F64(b.f_traction.to_vec())));
         sections.push((tag::W0_TRACTION, Words::F64(b.contact_w0[0].clone())));
         sections.push((tag::W0_PRESCRIBED, Words::F64(b.contact_w0[1].clone())));
+    }
+    if let Some(pf) = b.prefix {
+        let m = pf.c.nrows();
+        let mut packed = Vec::with_capacity(m * (m + 1) / 2);
+        for j in 0..m {
+            packed.extend_from_slice(
+                &pf.c
+                    .col(j)
+                    .try_as_col_major()
+                    .expect("contiguous")
+                    .as_slice()[j..],
+            );
+        }
+        sections.push((tag::PREFIX_ORDER, Words::Usize(pf.order.clone())));
+        sections.push((tag::PREFIX_C, Words::F64(packed)));
     }
     // The pattern of K for a partial factorisation's analysis (a contact model's factor keeps
     // its own layout instead).
@@ -278,6 +303,12 @@ fn restore(
         ))
     };
     let stored_grounded = take_u(tag::GROUNDED, "grounded DOFs")?;
+    let stored_row_order = match &sizes.row_order {
+        Some(_) if sizes.contact => {
+            Some(take_u(tag::PREFIX_ORDER, "order of the constraint rows")?)
+        }
+        _ => None,
+    };
     // A contact model's supernodal layout (its ordering is the stored one, then the rows).
     let layout = if sizes.contact {
         Some(crate::linsolve::Supernodes {
@@ -322,6 +353,29 @@ fn restore(
         (Some(w), Some((ft, w0t, w0p)))
     } else {
         (None, None)
+    };
+    let prefix = match &sizes.row_order {
+        Some(order) if sizes.contact => {
+            if stored_row_order.as_ref() != Some(order) {
+                return Err(bad("order of the constraint rows"));
+            }
+            let packed = take_f(tag::PREFIX_C, m * (m + 1) / 2, "factor of W")?;
+            let mut c = faer::Mat::<f64>::zeros(m, m);
+            let mut at = 0;
+            for j in 0..m {
+                for i in j..m {
+                    c[(i, j)] = packed[at];
+                    at += 1;
+                }
+            }
+            Some(crate::contact::solver::PrefixFactor::new(c, order.clone()))
+        }
+        _ => {
+            if sec.contains_key(&tag::PREFIX_C) || sec.contains_key(&tag::PREFIX_ORDER) {
+                return Err(bad("factor of W for a model without one"));
+            }
+            None
+        }
     };
     let order_len = if sizes.contact { n } else { n_i };
     if !is_permutation(&ordering, order_len) {
@@ -371,6 +425,7 @@ fn restore(
             krr_scale,
         },
         w,
+        prefix,
         f_prescribed,
         stiffness_nonzeros: meta[5],
         w0,

@@ -249,6 +249,12 @@ impl Model {
         let y = pair
             .as_ref()
             .map(|p| crate::contact::ConstraintRows::new(p, &dofs, &grounded));
+        // The order of the constraint rows in the saddle-point factorisation (large contact
+        // zones: the one whose trailing block is also a Cholesky factor of leading sets).
+        let row_order = y
+            .as_ref()
+            .filter(|y| y.rows.len() >= crate::contact::solver::PREFIX_FROM)
+            .map(|y| crate::contact::solver::prefix_order(&y.gap0, y.rows.len()));
         crate::trace::mark("pair, dofs");
         let t = Instant::now();
         let f_traction = traction_forces(case, &mesh, &orient, &dofs);
@@ -261,6 +267,7 @@ impl Model {
             n_interior: dofs.n_interior,
             n_retained: dofs.n_retained,
             m: y.as_ref().map_or(0, |y| y.rows.len()),
+            row_order: row_order.clone(),
         };
         let t = Instant::now();
         let mut lookup = cached::Lookup::None;
@@ -288,7 +295,7 @@ impl Model {
                     timings.assemble = t_traction;
                     timings.analyse = r.analyse_s;
                     let t = Instant::now();
-                    let w = r.w;
+                    let (w, prefix) = (r.w, r.prefix);
                     let contact = pair.zip(y).map(|(p, y)| {
                         crate::contact::ContactModel::with_w(
                             p,
@@ -297,6 +304,7 @@ impl Model {
                             &r.condensed,
                             e_star.expect("with pair"),
                             w.expect("a contact model's entry holds W"),
+                            prefix,
                         )
                     });
                     timings.condense = t.elapsed().as_secs_f64();
@@ -322,7 +330,7 @@ impl Model {
                     let (analysed, (f_prescribed, t_values)) = rayon::join(
                         || {
                             let t = Instant::now();
-                            let s = analyse(&k, &dofs, y.as_ref());
+                            let s = analyse(&k, &dofs, y.as_ref(), row_order.as_deref());
                             (s, t.elapsed().as_secs_f64())
                         },
                         || {
@@ -350,7 +358,7 @@ impl Model {
                         &grounded,
                         pair.zip(y),
                         e_star,
-                        symbolic?,
+                        (symbolic?, row_order),
                         timings,
                     )?;
                     // The pattern, the assembly and analysis together, the factorisation.
@@ -407,6 +415,7 @@ impl Model {
                     grounded: &grounded,
                     condensed: &condensed,
                     w: contact.as_ref().map(|c| &c.system.w),
+                    prefix: contact.as_ref().and_then(|c| c.system.prefix.as_deref()),
                     f_prescribed: &f_prescribed,
                     f_traction: &f_traction,
                     contact_w0: &contact_w0,
@@ -502,6 +511,7 @@ fn analyse(
     k: &UpperCsc,
     dofs: &DofMap,
     y: Option<&crate::contact::ConstraintRows>,
+    row_order: Option<&[usize]>,
 ) -> Result<Analysis, ModelError> {
     Ok(match y {
         None => Analysis::Partial(PartialSymbolic::analyse(
@@ -511,7 +521,13 @@ fn analyse(
             &k.row_idx,
         )?),
         Some(y) => {
-            let y_free = y.free(dofs.n_interior);
+            let mut y_free = y.free(dofs.n_interior);
+            if let Some(order) = row_order {
+                y_free = order
+                    .iter()
+                    .map(|&i| std::mem::take(&mut y_free[i]))
+                    .collect();
+            }
             let symbolic = SaddleSymbolic::analyse(dofs.n_free(), &k.col_ptr, &k.row_idx, &y_free)?;
             Analysis::Saddle(symbolic, y_free)
         }
@@ -531,7 +547,7 @@ fn factorise(
     grounded: &[usize],
     pair: Option<(crate::contact::Pair, crate::contact::ConstraintRows)>,
     e_star: Option<f64>,
-    analysis: Analysis,
+    (analysis, row_order): (Analysis, Option<Vec<usize>>),
     timings: &mut Timings,
 ) -> Result<(Condensed, Option<crate::contact::ContactModel>, Vec<usize>), ModelError> {
     let n_i = dofs.n_interior;
@@ -559,6 +575,7 @@ fn factorise(
                 dofs.pilot.is_some(),
                 &condensed,
                 e_star.expect("with pair"),
+                row_order,
             );
             timings.condense = t.elapsed().as_secs_f64();
             Ok((condensed, Some(contact), symbolic.ordering()))

@@ -2,7 +2,7 @@
 //! Sherman–Morrison–Woodbury updates for the rows that differ from it, and the LU of a dense
 //! Newton matrix reused as a GMRES preconditioner.
 
-use super::{NewtonRows, SpecialRow};
+use super::{NewtonRows, PrefixFactor, SpecialRow};
 use faer::Mat;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::{factor as llt_factor, solve as llt_solve};
@@ -73,8 +73,11 @@ pub struct LuCache {
     /// the run summary).
     pub factorisations: usize,
     pub gmres_iterations: usize,
-    /// Unknowns of the largest Delassus block factorised so far.
+    /// Unknowns of the largest Delassus block factorised (or taken from the prefix factor) so far.
     pub largest_block: usize,
+    /// Delassus blocks taken from the prefix factor of `W` (not factorised, not counted in
+    /// `factorisations`).
+    pub prefix_blocks: usize,
     /// Seconds spent in each part of the structured solve (for the run summary).
     pub timings: SolveTimings,
     /// Solve every system directly (no start from the step's last direct solve): set by
@@ -108,12 +111,61 @@ pub struct SolveTimings {
 /// outside it with `W[out_rows, unk]`, contiguous for the product of every iteration.
 pub struct Block {
     /// The lower Cholesky factor `L` of `K = L Lᵀ` (its strictly upper part is zero).
-    l: Mat<f64>,
+    l: BlockFactor,
     out_rows: Vec<usize>,
     w_out: Mat<f64>,
 }
 
+/// Where a block's Cholesky factor is.
+enum BlockFactor {
+    /// Factorised from `W`.
+    Owned(Mat<f64>),
+    /// The leading `p × p` block of a [`PrefixFactor`] (the block's unknowns are the first
+    /// `p` of its order).
+    Prefix(Arc<PrefixFactor>, usize),
+}
+
+/// Unknowns from which a Delassus block is taken from the [`PrefixFactor`] when it is nearly
+/// a leading set of its order (smaller blocks cost little to factorise).
+const PREFIX_MIN: usize = 256;
+
+/// The length `p` of the leading set of `pf`'s order that holds the unknowns `unk` (distinct
+/// μ indices), if it holds few others: at most `p / 64`, the share of unknowns not in the
+/// system at which [`LuCache::solve_rows`] refactorises at a new step (each costs a special
+/// row, a column of `G` and a row of every capacitance system).
+fn leading_set(pf: &PrefixFactor, unk: &[usize]) -> Option<usize> {
+    if unk.len() < PREFIX_MIN {
+        return None;
+    }
+    let p = unk.iter().map(|&u| pf.pos[u]).max()? + 1;
+    (p - unk.len() <= p / 64).then_some(p)
+}
+
 impl Block {
+    /// The block of the first `p` unknowns of `pf`'s order (`W[order[..p], order[..p]]`),
+    /// whose factor is the leading block of `pf`'s: no factorisation. `None` under the same
+    /// pivot test as [`Self::factorise`].
+    fn prefix(w: &Mat<f64>, pf: &Arc<PrefixFactor>, p: usize) -> Option<Block> {
+        let pivots: Vec<f64> = (0..p).map(|i| pf.c[(i, i)].powi(2)).collect();
+        if !pivots_ok(&pivots) {
+            return None;
+        }
+        let (out_rows, w_out) = outside(w, &pf.order[..p]);
+        Some(Block {
+            l: BlockFactor::Prefix(pf.clone(), p),
+            out_rows,
+            w_out,
+        })
+    }
+
+    /// The lower Cholesky factor.
+    fn l(&self) -> faer::MatRef<'_, f64> {
+        match &self.l {
+            BlockFactor::Owned(l) => l.as_ref(),
+            BlockFactor::Prefix(pf, p) => pf.c.as_ref().submatrix(0, 0, *p, *p),
+        }
+    }
+
     /// Factorises `W[unk, unk]`; `None` if it is singular or not numerically positive definite.
     fn factorise(w: &Mat<f64>, unk: &[usize]) -> Option<Block> {
         // Sequential (faer's global parallelism is set so at every model build): a rayon
@@ -138,20 +190,16 @@ impl Block {
             Default::default(),
         )
         .ok()?;
-        // The pivots are L_ii²: as for an LU, singular when the smallest is below 1e-12 of the
-        // largest; and pivots within 2^52 of the smallest normal number have lost digits to
-        // underflow (absurd moduli make W that small).
         let pivots: Vec<f64> = (0..n).map(|i| l[(i, i)].powi(2)).collect();
-        let lo = pivots.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = pivots.iter().copied().fold(0.0, f64::max);
-        if lo <= 1e-12 * hi || lo < f64::MIN_POSITIVE / f64::EPSILON {
+        if !pivots_ok(&pivots) {
             return None;
         }
-        let mut inside = vec![false; w.nrows()];
-        unk.iter().for_each(|&u| inside[u] = true);
-        let out_rows: Vec<usize> = (0..w.nrows()).filter(|&i| !inside[i]).collect();
-        let w_out = Mat::from_fn(out_rows.len(), unk.len(), |r, q| w[(out_rows[r], unk[q])]);
-        Some(Block { l, out_rows, w_out })
+        let (out_rows, w_out) = outside(w, unk);
+        Some(Block {
+            l: BlockFactor::Owned(l),
+            out_rows,
+            w_out,
+        })
     }
 
     /// Solves `K X = B` in place for the columns of `b` (sequential, as `Llt::solve_in_place`
@@ -159,18 +207,36 @@ impl Block {
     fn solve_in_place(&self, b: &mut Mat<f64>) {
         let par = faer::Par::Seq;
         let mut mem = MemBuffer::new(llt_solve::solve_in_place_scratch::<f64>(
-            self.l.nrows(),
+            self.l().nrows(),
             b.ncols(),
             par,
         ));
         llt_solve::solve_in_place_with_conj(
-            self.l.as_ref(),
+            self.l(),
             faer::Conj::No,
             b.as_mut(),
             par,
             MemStack::new(&mut mem),
         );
     }
+}
+
+/// Whether the pivots `L_ii²` of a Cholesky factor are usable: as for an LU, singular when the
+/// smallest is below 1e-12 of the largest; and pivots within 2^52 of the smallest normal number
+/// have lost digits to underflow (absurd moduli make W that small).
+fn pivots_ok(pivots: &[f64]) -> bool {
+    let lo = pivots.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = pivots.iter().copied().fold(0.0, f64::max);
+    !(lo <= 1e-12 * hi || lo < f64::MIN_POSITIVE / f64::EPSILON)
+}
+
+/// The rows of `w` outside the unknowns `unk`, and `W[out_rows, unk]`.
+fn outside(w: &Mat<f64>, unk: &[usize]) -> (Vec<usize>, Mat<f64>) {
+    let mut inside = vec![false; w.nrows()];
+    unk.iter().for_each(|&u| inside[u] = true);
+    let out_rows: Vec<usize> = (0..w.nrows()).filter(|&i| !inside[i]).collect();
+    let w_out = Mat::from_fn(out_rows.len(), unk.len(), |r, q| w[(out_rows[r], unk[q])]);
+    (out_rows, w_out)
 }
 
 /// Factorised Delassus blocks shared by the simulations of one model that run side by side (a
@@ -358,13 +424,19 @@ impl LuCache {
     /// solves for the same columns in the same batches. The work is not counted in the
     /// factorisations (the uninterrupted run counted it once). `false` if the block does not
     /// factorise (the record is not from this model).
-    pub fn replay(&mut self, w: &Mat<f64>, rec: &BlockRecord) -> bool {
-        let count = self.factorisations;
-        let ok = self.factorise_block(w, &rec.unk).is_some()
+    pub fn replay(
+        &mut self,
+        w: &Mat<f64>,
+        prefix: Option<&Arc<PrefixFactor>>,
+        rec: &BlockRecord,
+    ) -> bool {
+        let (count, taken) = (self.factorisations, self.prefix_blocks);
+        let ok = self.factorise_block(w, prefix, &rec.unk).is_some()
             && rec.batches.iter().all(|b| {
                 b.iter().all(|&q| q < self.k_unk.len()) && self.solve_columns(b.clone()).is_some()
             });
         self.factorisations = count;
+        self.prefix_blocks = taken;
         if !ok {
             self.clear();
         }
@@ -400,6 +472,7 @@ impl LuCache {
     pub fn solve_rows(
         &mut self,
         w: &Mat<f64>,
+        prefix: Option<&Arc<PrefixFactor>>,
         rows: &NewtonRows,
         new_step: bool,
     ) -> Option<(Vec<f64>, Vec<f64>)> {
@@ -413,7 +486,7 @@ impl LuCache {
         let limit = self.k_unk.len() / if new_step { 64 } else { 4 };
         if !covered || left > limit {
             let t = Instant::now();
-            let done = self.factorise_block(w, &rows.unk);
+            let done = self.factorise_block(w, prefix, &rows.unk);
             self.timings.factorise += t.elapsed().as_secs_f64();
             done?;
         }
@@ -687,14 +760,35 @@ impl LuCache {
 
     /// Factorises `K = W[unk, unk]` for [`Self::solve_rows`]; `None` if it is singular or not
     /// numerically positive definite.
-    fn factorise_block(&mut self, w: &Mat<f64>, unk: &[usize]) -> Option<()> {
-        self.factorisations += 1;
-        self.largest_block = self.largest_block.max(unk.len());
+    ///
+    /// With a [`PrefixFactor`] (`prefix`), a set of unknowns that is nearly a leading set of its
+    /// order ([`leading_set`]) takes that whole leading set as the block, whose factor is read
+    /// from the prefix factor instead of computed; its unknowns not in `unk` become special
+    /// rows of the systems (`x_q = 0`), as those that leave the contact do.
+    fn factorise_block(
+        &mut self,
+        w: &Mat<f64>,
+        prefix: Option<&Arc<PrefixFactor>>,
+        unk: &[usize],
+    ) -> Option<()> {
         self.forget_block();
-        let block = match &self.shared {
-            Some(store) => store.get(w, unk),
-            None => Block::factorise(w, unk).map(Arc::new),
-        }?;
+        let lead = prefix.and_then(|pf| leading_set(pf, unk).map(|p| (pf, p)));
+        let (unk, block) = match lead {
+            Some((pf, p)) => {
+                self.prefix_blocks += 1;
+                (&pf.order[..p], Block::prefix(w, pf, p).map(Arc::new))
+            }
+            None => {
+                self.factorisations += 1;
+                let block = match &self.shared {
+                    Some(store) => store.get(w, unk),
+                    None => Block::factorise(w, unk).map(Arc::new),
+                };
+                (unk, block)
+            }
+        };
+        self.largest_block = self.largest_block.max(unk.len());
+        let block = block?;
         self.k_pos = vec![usize::MAX; w.nrows()];
         for (q, &u) in unk.iter().enumerate() {
             self.k_pos[u] = q;
@@ -805,6 +899,24 @@ fn gmres(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A set of unknowns is served by the prefix factor when it fills its leading set but for
+    /// at most one in 64, and is large enough.
+    #[test]
+    fn the_leading_set_of_a_prefix_factor_holds_the_unknowns_with_few_others() {
+        let m = 1000;
+        let order: Vec<usize> = (0..m).rev().collect();
+        let pf = PrefixFactor::new(Mat::zeros(1, 1), order.clone());
+        let first = |p: usize| order[..p].to_vec();
+        assert_eq!(leading_set(&pf, &first(640)), Some(640));
+        // Ten holes in 640: 640 / 64 = 10 allowed; eleven are not.
+        let holes = |k: usize| -> Vec<usize> { first(640).into_iter().skip(k).collect() };
+        assert_eq!(leading_set(&pf, &holes(10)), Some(640));
+        assert_eq!(leading_set(&pf, &holes(11)), None);
+        // Too small to be worth it.
+        assert_eq!(leading_set(&pf, &first(PREFIX_MIN - 1)), None);
+        assert_eq!(leading_set(&pf, &first(PREFIX_MIN)), Some(PREFIX_MIN));
+    }
 
     /// A symmetric `m × m` matrix and a vector of forces, both from a fixed sequence.
     fn w_and_mu(m: usize) -> (Mat<f64>, Vec<f64>) {

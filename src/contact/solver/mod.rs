@@ -208,6 +208,58 @@ pub struct ContactSystem {
     pub slip_orient: f64,
     /// Whether the pilot drives a body that no support holds (only the contact can).
     pub floating_pilot: bool,
+    /// The Cholesky factor of `W` in an order where contact sets are leading sets, when the
+    /// saddle-point factorisation gave it (see [`PrefixFactor`]).
+    pub prefix: Option<std::sync::Arc<PrefixFactor>>,
+}
+
+/// A lower Cholesky factor `C` of the Delassus operator in an order of the contact unknowns
+/// (`W[order, order] = C Cᵀ`): the anchors, then the slave nodes by increasing initial gap,
+/// each node's normal then tangential unknown. The saddle-point factorisation gives it with
+/// no extra work when its constraint rows are in this order
+/// ([`crate::linsolve::SaddleFactor::delassus`]), and the leading `p × p` block of `C` is the
+/// Cholesky factor of `W` restricted to the first `p` unknowns of the order. A contact zone
+/// that grows from the first point of contact is such a leading set (up to a few nodes), so
+/// the structured solve takes its Delassus block from `C` instead of factorising it.
+pub struct PrefixFactor {
+    /// `C`, `m × m`, lower triangular (strictly upper part zero).
+    pub c: Mat<f64>,
+    /// `order[k]`: the μ index at position `k`.
+    pub order: Vec<usize>,
+    /// `pos[i]`: the position of μ index `i` (the inverse of `order`).
+    pub pos: Vec<usize>,
+}
+
+impl PrefixFactor {
+    pub fn new(c: Mat<f64>, order: Vec<usize>) -> PrefixFactor {
+        let mut pos = vec![0; order.len()];
+        for (k, &i) in order.iter().enumerate() {
+            pos[i] = k;
+        }
+        PrefixFactor { c, order, pos }
+    }
+}
+
+/// Contact unknowns (rows of `W`) from which the constraint rows are factorised in the order of
+/// [`PrefixFactor`] and its factor kept (the levels where the structured solve's shortcuts are
+/// on, L6 up on the VM272 ladder; below, the rows stay in the order of μ and every result is
+/// what it was before the prefix factor existed).
+pub const PREFIX_FROM: usize = newton::SHORTCUTS_FROM;
+
+/// The order of [`PrefixFactor`] for a system of `ns` slave nodes with initial nodal gaps
+/// `gap0` (mortar gaps, already per unit weight) and `m − 2 ns` anchors (a model takes it
+/// from [`PREFIX_FROM`] unknowns).
+pub fn prefix_order(gap0: &[f64], m: usize) -> Vec<usize> {
+    let ns = gap0.len();
+    assert!(m >= 2 * ns, "two unknowns per slave node and the anchors");
+    let mut nodes: Vec<usize> = (0..ns).collect();
+    nodes.sort_by(|&a, &b| gap0[a].total_cmp(&gap0[b]).then(a.cmp(&b)));
+    let mut order: Vec<usize> = (2 * ns..m).collect();
+    for j in nodes {
+        order.push(j);
+        order.push(ns + j);
+    }
+    order
 }
 
 /// Options of a contact solve.
@@ -339,6 +391,18 @@ impl ContactSystem {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The prefix order: the anchors, then the nodes by initial gap (ties by index), each
+    /// node's normal then tangential unknown.
+    #[test]
+    fn the_prefix_order_puts_the_anchors_then_the_closest_nodes_first() {
+        let gap0 = [0.3, 0.0, 0.1, 0.0, 0.2];
+        // ns = 5: normals 0..5, tangentials 5..10, anchors 10, 11.
+        assert_eq!(
+            prefix_order(&gap0, 12),
+            vec![10, 11, 1, 6, 3, 8, 2, 7, 4, 9, 0, 5]
+        );
+    }
 
     /// A state with the statuses given by a string: `o` open, `t` stick, `s` slip.
     fn state(s: &str) -> State {

@@ -413,7 +413,7 @@ impl ContactSystem {
             .as_deref_mut()
             .filter(|_| m >= STRUCTURED_MIN && !dense_only)
             && let Some(rows) = self.newton_rows(it)
-            && let Some((x, w_mu)) = c.solve_rows(&self.w, &rows, new_step)
+            && let Some((x, w_mu)) = c.solve_rows(&self.w, self.prefix.as_ref(), &rows, new_step)
         {
             let mut new_mu = vec![0.0; m];
             for (q, &u) in rows.unk.iter().enumerate() {
