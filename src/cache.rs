@@ -309,6 +309,42 @@ pub enum Words {
     /// The ranges `(start, len)` of floats shared with the model, one after the other (the
     /// leading block of a saddle factor, [`crate::linsolve::Supernodes::leading`]).
     Gathered(crate::linsolve::SharedValues, Vec<(usize, usize)>),
+    /// Columns `(j, from)` of a dense matrix shared with the model, each from row `from` on,
+    /// one after the other (the Delassus operator and its Cholesky factor: 130 and 65 MB at
+    /// L7, which a copy would add to the run's peak memory).
+    Columns(std::sync::Arc<dyn DenseColumns>, Vec<(usize, usize)>),
+}
+
+/// A dense column-major matrix whose columns a cache entry can be written from.
+pub trait DenseColumns: Send + Sync {
+    fn rows(&self) -> usize;
+    /// Column `j` from row `from` on.
+    fn column(&self, j: usize, from: usize) -> &[f64];
+}
+
+impl DenseColumns for faer::Mat<f64> {
+    fn rows(&self) -> usize {
+        self.nrows()
+    }
+    fn column(&self, j: usize, from: usize) -> &[f64] {
+        &self
+            .col(j)
+            .try_as_col_major()
+            .expect("the columns of a Mat are contiguous")
+            .as_slice()[from..]
+    }
+}
+
+impl Words {
+    /// All the columns of `m`.
+    pub fn all_columns(m: std::sync::Arc<dyn DenseColumns>, ncols: usize) -> Words {
+        Words::Columns(m, (0..ncols).map(|j| (j, 0)).collect())
+    }
+
+    /// The lower triangle of `m` (order `n`), column by column.
+    pub fn lower_columns(m: std::sync::Arc<dyn DenseColumns>, n: usize) -> Words {
+        Words::Columns(m, (0..n).map(|j| (j, j)).collect())
+    }
 }
 
 impl Words {
@@ -319,6 +355,7 @@ impl Words {
             Words::F64(v) => v.len(),
             Words::Shared(v) => v.len(),
             Words::Gathered(_, r) => r.iter().map(|&(_, len)| len).sum(),
+            Words::Columns(m, c) => c.iter().map(|&(_, from)| m.rows() - from).sum(),
         }
     }
 
@@ -329,7 +366,7 @@ impl Words {
     fn kind(&self) -> u32 {
         match self {
             Words::U64(_) | Words::Usize(_) => 1,
-            Words::F64(_) | Words::Shared(_) | Words::Gathered(..) => 2,
+            Words::F64(_) | Words::Shared(_) | Words::Gathered(..) | Words::Columns(..) => 2,
         }
     }
 
@@ -352,6 +389,20 @@ impl Words {
                     let mut buf = Vec::with_capacity(CHUNK + 8 * 1024);
                     for &(a, len) in ranges {
                         buf.extend_from_slice(bytemuck::cast_slice(&v[a..a + len]));
+                        if buf.len() >= CHUNK {
+                            f(&buf)?;
+                            buf.clear();
+                        }
+                    }
+                    if !buf.is_empty() {
+                        f(&buf)?;
+                    }
+                    return Ok(());
+                }
+                Words::Columns(m, cols) => {
+                    let mut buf = Vec::with_capacity(CHUNK + 8 * m.rows());
+                    for &(j, from) in cols {
+                        buf.extend_from_slice(bytemuck::cast_slice(m.column(j, from)));
                         if buf.len() >= CHUNK {
                             f(&buf)?;
                             buf.clear();
@@ -399,7 +450,9 @@ impl Words {
             Words::Usize(v) => chunks!(v, |x: usize| x as u64),
             Words::F64(v) => chunks!(v, |x: f64| x),
             Words::Shared(v) => chunks!(&v[..], |x: f64| x),
-            Words::Gathered(..) => chunks!(self.gathered().expect("gathered words"), |x: f64| x),
+            Words::Gathered(..) | Words::Columns(..) => {
+                chunks!(self.gathered().expect("gathered words"), |x: f64| x)
+            }
         }
         Ok(())
     }
@@ -418,7 +471,7 @@ impl Words {
         match self {
             Words::F64(v) => Some(v),
             Words::Shared(v) => Some(v.to_vec()),
-            Words::Gathered(..) => self.gathered(),
+            Words::Gathered(..) | Words::Columns(..) => self.gathered(),
             _ => None,
         }
     }
@@ -430,6 +483,11 @@ impl Words {
                 ranges
                     .iter()
                     .flat_map(|&(a, len)| v[a..a + len].iter().copied())
+                    .collect(),
+            ),
+            Words::Columns(m, cols) => Some(
+                cols.iter()
+                    .flat_map(|&(j, from)| m.column(j, from).iter().copied())
                     .collect(),
             ),
             _ => None,
@@ -1139,6 +1197,21 @@ mod tests {
         let (direct, converted) = both_ways(&w);
         assert_eq!(8 * w.len(), expected.len());
         assert!(direct == expected && converted == expected);
+        // A dense matrix's columns, all of them and the lower triangle (more than a chunk).
+        let m = 1100;
+        let a = std::sync::Arc::new(faer::Mat::from_fn(m, m, |i, j| i as f64 - 0.5 * j as f64));
+        for (w, lower) in [
+            (Words::all_columns(a.clone(), m), false),
+            (Words::lower_columns(a.clone(), m), true),
+        ] {
+            let expected: Vec<u8> = (0..m)
+                .flat_map(|j| (if lower { j } else { 0 }..m).map(move |i| (i, j)))
+                .flat_map(|(i, j)| a[(i, j)].to_le_bytes())
+                .collect();
+            let (direct, converted) = both_ways(&w);
+            assert_eq!(8 * w.len(), expected.len());
+            assert!(direct == expected && converted == expected);
+        }
     }
 
     #[test]

@@ -18,7 +18,7 @@ fn system(ns: usize, w: &[f64], gap0: &[f64]) -> ContactSystem {
     ContactSystem {
         ns,
         has_pilot: false,
-        w: Mat::from_fn(m, m, |i, j| w[i * m + j]),
+        w: std::sync::Arc::new(Mat::from_fn(m, m, |i, j| w[i * m + j])),
         gap0: gap0.to_vec(),
         v0: vec![0.0; ns],
         c: 1.0,

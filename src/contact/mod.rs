@@ -135,7 +135,7 @@ impl ContactModel {
         let system = solver::ContactSystem {
             ns,
             has_pilot,
-            w,
+            w: std::sync::Arc::new(w),
             gap0: y.gap0,
             v0: y.v0,
             c: e_star,

@@ -170,8 +170,8 @@ pub(super) struct Built<'a> {
     pub nnz: usize,
     pub grounded: &'a [usize],
     pub condensed: &'a Condensed,
-    pub w: Option<&'a faer::Mat<f64>>,
-    pub prefix: Option<&'a crate::contact::solver::PrefixFactor>,
+    pub w: Option<&'a Arc<faer::Mat<f64>>>,
+    pub prefix: Option<&'a Arc<crate::contact::solver::PrefixFactor>>,
     pub f_prescribed: &'a [f64],
     pub f_traction: &'a [f64],
     pub contact_w0: &'a [Vec<f64>; 2],
@@ -210,29 +210,15 @@ pub(super) fn entry(b: Built) -> Entry {
     ];
     if let Some(w) = b.w {
         let m = w.nrows();
-        let mut col_major = Vec::with_capacity(m * m);
-        for j in 0..m {
-            col_major.extend((0..m).map(|i| w[(i, j)]));
-        }
-        sections.push((tag::DELASSUS, Words::F64(col_major)));
+        sections.push((tag::DELASSUS, Words::all_columns(w.clone(), m)));
         sections.push((tag::F_TRACTION, Words::F64(b.f_traction.to_vec())));
         sections.push((tag::W0_TRACTION, Words::F64(b.contact_w0[0].clone())));
         sections.push((tag::W0_PRESCRIBED, Words::F64(b.contact_w0[1].clone())));
     }
     if let Some(pf) = b.prefix {
         let m = pf.c.nrows();
-        let mut packed = Vec::with_capacity(m * (m + 1) / 2);
-        for j in 0..m {
-            packed.extend_from_slice(
-                &pf.c
-                    .col(j)
-                    .try_as_col_major()
-                    .expect("contiguous")
-                    .as_slice()[j..],
-            );
-        }
         sections.push((tag::PREFIX_ORDER, Words::Usize(pf.order.clone())));
-        sections.push((tag::PREFIX_C, Words::F64(packed)));
+        sections.push((tag::PREFIX_C, Words::lower_columns(pf.clone(), m)));
     }
     // The pattern of K for a partial factorisation's analysis (a contact model's factor keeps
     // its own layout instead).

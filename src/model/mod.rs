@@ -415,7 +415,7 @@ impl Model {
                     grounded: &grounded,
                     condensed: &condensed,
                     w: contact.as_ref().map(|c| &c.system.w),
-                    prefix: contact.as_ref().and_then(|c| c.system.prefix.as_deref()),
+                    prefix: contact.as_ref().and_then(|c| c.system.prefix.as_ref()),
                     f_prescribed: &f_prescribed,
                     f_traction: &f_traction,
                     contact_w0: &contact_w0,

@@ -189,7 +189,7 @@ pub struct ContactSystem {
     /// Whether the first two anchors are the pilot's (x, y) DOFs.
     pub has_pilot: bool,
     /// Delassus operator `W` (m × m), m = 2 ns (+ 2 with a pilot).
-    pub w: Mat<f64>,
+    pub w: std::sync::Arc<Mat<f64>>,
     /// Nodal initial gaps (including the effect of prescribed displacements).
     pub gap0: Vec<f64>,
     /// Constant tangential offsets from prescribed displacements.
@@ -228,6 +228,15 @@ pub struct PrefixFactor {
     pub order: Vec<usize>,
     /// `pos[i]`: the position of μ index `i` (the inverse of `order`).
     pub pos: Vec<usize>,
+}
+
+impl crate::cache::DenseColumns for PrefixFactor {
+    fn rows(&self) -> usize {
+        self.c.nrows()
+    }
+    fn column(&self, j: usize, from: usize) -> &[f64] {
+        self.c.column(j, from)
+    }
 }
 
 impl PrefixFactor {
