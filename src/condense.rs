@@ -52,6 +52,15 @@ impl Factor {
         }
     }
 
+    /// As [`Self::solve_block_in_place`], the columns of a saddle factor in one sweep on the
+    /// calling thread ([`crate::linsolve::SaddleFactor::solve_block_in_place_one_sweep`]).
+    pub fn solve_block_in_place_one_sweep(&self, b: &mut [f64], ncols: usize) {
+        match self {
+            Factor::Partial(c) => c.solve_block_in_place(b, ncols),
+            Factor::Saddle(s) => s.solve_block_in_place_one_sweep(b, ncols),
+        }
+    }
+
     /// `L_RR` of a partial factorisation.
     fn l_rr(&self) -> faer::MatRef<'_, f64> {
         match self {
@@ -208,7 +217,14 @@ impl Condensed {
     /// the retained DOFs that already include the grounding-spring forces,
     /// `u = K̂⁻¹ (f + [0; r_R])`. One block solve: the factor is read once for all the cases,
     /// and each field is bit for bit what a solve of its own gives.
-    pub fn recover_total_many(&self, cases: &[(Vec<f64>, Vec<f64>)]) -> Vec<Vec<f64>> {
+    ///
+    /// `spread`: the columns split over rayon's threads; else one sweep on the calling thread
+    /// (see [`Factor::solve_block_in_place_one_sweep`]).
+    pub fn recover_total_many(
+        &self,
+        cases: &[(Vec<f64>, Vec<f64>)],
+        spread: bool,
+    ) -> Vec<Vec<f64>> {
         let Some(n) = cases.first().map(|(f, _)| f.len()) else {
             return Vec::new();
         };
@@ -220,7 +236,12 @@ impl Condensed {
                 x[col + self.n_i + i] += r;
             }
         }
-        self.chol.solve_block_in_place(&mut x, cases.len());
+        if spread {
+            self.chol.solve_block_in_place(&mut x, cases.len());
+        } else {
+            self.chol
+                .solve_block_in_place_one_sweep(&mut x, cases.len());
+        }
         x.chunks_exact(n).map(<[f64]>::to_vec).collect()
     }
 }

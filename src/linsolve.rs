@@ -905,8 +905,20 @@ impl SaddleFactor {
     }
 
     /// Solves `K̂ X = B` in place for a column-major block of `ncols` right-hand sides: the
-    /// sweeps of the leading block of the factor only.
+    /// sweeps of the leading block of the factor only, the columns split over rayon's threads.
     pub fn solve_block_in_place(&self, b: &mut [f64], ncols: usize) {
+        self.solve_block(b, ncols, true);
+    }
+
+    /// As [`Self::solve_block_in_place`] in one sweep on the calling thread, which reads the
+    /// factor once for all the columns (the output writer's recoveries: two columns cost 1.3
+    /// times one on L7, `examples/recovery_timing`, where two threads would read it twice and
+    /// take the core the contact solve runs on). The same bits.
+    pub fn solve_block_in_place_one_sweep(&self, b: &mut [f64], ncols: usize) {
+        self.solve_block(b, ncols, false);
+    }
+
+    fn solve_block(&self, b: &mut [f64], ncols: usize, split: bool) {
         let (n, m) = (self.n, self.m);
         let size = n + m;
         if n == 0 || ncols == 0 {
@@ -937,7 +949,11 @@ impl SaddleFactor {
         // Each column sees the same operations in the same order whether it is solved alone
         // or with others, on any thread: the columns are split over the threads (each group
         // reads the factor once; the sweeps are memory-bound).
-        let threads = rayon::current_num_threads().clamp(1, ncols.max(1));
+        let threads = if split {
+            rayon::current_num_threads().clamp(1, ncols.max(1))
+        } else {
+            1
+        };
         let per = ncols.div_ceil(threads).max(1);
         if threads > 1 {
             use rayon::prelude::*;

@@ -29,6 +29,10 @@ pub struct RunOptions {
     pub resume: Option<PathBuf>,
     /// The model cache (`--cache DIR`, `--no-cache`; see [`crate::cache`]).
     pub cache: crate::cache::Choice,
+    /// The process exits when the run returns (the command line): the model is not freed at
+    /// the end of a run that completed (the system takes its memory back at exit), only its
+    /// model-cache entry finished. A program that goes on after the run leaves it `false`.
+    pub exit_after: bool,
 }
 
 impl RunOptions {
@@ -283,6 +287,14 @@ pub fn run_model(
     }
     if let Some(e) = failure {
         return Err(e);
+    }
+    if opts.exit_after {
+        // The model cache's entry is finished (its `Drop` waits for the writer); the rest of
+        // the model's memory goes back to the system with the process. Freed buffer by buffer
+        // it took 80–90 ms at L7 (1.3 GB: the unmaps interrupt the other core to flush its
+        // TLB), 5 % of what the run does after the factorisation.
+        drop(model.cache_job.take());
+        std::mem::forget(model);
     }
     Ok(summary)
 }

@@ -164,7 +164,10 @@ impl Model {
 
     /// [`Model::contact_displacement`] of several states in one block solve, which reads the
     /// factor once for all of them (bit for bit the same fields).
-    pub fn contact_displacements(&self, states: &[(f64, &State)]) -> Vec<Vec<f64>> {
+    ///
+    /// `spread`: the columns split over rayon's threads (else one sweep on the calling thread,
+    /// as the output writer does while the contact solve has the other core).
+    pub fn contact_displacements(&self, states: &[(f64, &State)], spread: bool) -> Vec<Vec<f64>> {
         if states.is_empty() {
             return Vec::new();
         }
@@ -178,13 +181,13 @@ impl Model {
                 )
             })
             .collect();
-        self.condensed.recover_total_many(&cases)
+        self.condensed.recover_total_many(&cases, spread)
     }
 
     /// The displacement of all free DOFs for a contact state at traction scale `scale`: one
     /// solve with the factorised stiffness.
     pub fn contact_displacement(&self, scale: f64, st: &State) -> Vec<f64> {
-        let mut u = self.contact_displacements(&[(scale, st)]);
+        let mut u = self.contact_displacements(&[(scale, st)], true);
         u.pop().expect("one field per state")
     }
 

@@ -123,7 +123,11 @@ impl<'a> Series<'a> {
                 )
             })
             .collect();
-        let mut recovered = model.contact_displacements(&states).into_iter();
+        // While the driver solves the next steps, the batch is recovered in one sweep on this
+        // thread (the factor read once, the other core left to the contact solve); a batch
+        // with the last step, which the driver waits for, on all threads.
+        let spread = steps.iter().any(|s| s.reply.is_some());
+        let mut recovered = model.contact_displacements(&states, spread).into_iter();
         let fields: Vec<std::borrow::Cow<[f64]>> = steps
             .iter()
             .map(|s| match &s.u {

@@ -352,7 +352,7 @@ pub fn sweep(
                     let states: Vec<_> = c.iter().map(|&(_, scale, st)| (scale, st)).collect();
                     c.iter()
                         .map(|&(k, _, _)| k)
-                        .zip(model.contact_displacements(&states))
+                        .zip(model.contact_displacements(&states, true))
                 })
                 .collect();
             for (k, u) in fields {
