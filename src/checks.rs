@@ -162,19 +162,15 @@ fn equilibrium(inp: &Input) -> Check {
     let model = inp.model;
     let dofs = &model.dofs;
     // Each element's nodal forces and the size of the terms summed into them.
-    let (per_elem, terms): (Vec<[f64; 12]>, Vec<f64>) = model
-        .element_forces(inp.u)
-        .into_iter()
-        .map(|f| {
-            let umax = f.ue.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            (f.fe, f.kmax * umax)
-        })
-        .unzip();
-    let term = terms.iter().fold(0.0f64, |m, &v| m.max(v));
+    let per_elem: Vec<([f64; 12], f64)> = model.map_element_forces(inp.u, |f| {
+        let umax = f.ue.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        (f.fe, f.kmax * umax)
+    });
+    let term = per_elem.iter().fold(0.0f64, |m, &(_, v)| m.max(v));
     // Residual at free DOFs: f_int − loads − contact and pilot forces.
     let mut res: Vec<f64> = model.f_traction.iter().map(|f| -inp.scale * f).collect();
     let mut reaction = [0.0; 2];
-    for ((e, _), fe) in model.elems.iter().zip(&per_elem) {
+    for ((e, _), (fe, _)) in model.elems.iter().zip(&per_elem) {
         for (a, &n) in model.mesh.triangles[*e].nodes.iter().enumerate() {
             for c in 0..2 {
                 match dofs.node[n][c] {

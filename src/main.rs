@@ -151,7 +151,6 @@ fn main() -> ExitCode {
                 log,
                 resume,
                 cache: cache_choice(cache, no_cache),
-                exit_after: true,
             };
             let ran = stickslip::run::run(&case, &opts);
             stickslip::trace::mark("run returned");

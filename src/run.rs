@@ -29,10 +29,6 @@ pub struct RunOptions {
     pub resume: Option<PathBuf>,
     /// The model cache (`--cache DIR`, `--no-cache`; see [`crate::cache`]).
     pub cache: crate::cache::Choice,
-    /// The process exits when the run returns (the command line): the model is not freed at
-    /// the end of a run that completed (the system takes its memory back at exit), only its
-    /// model-cache entry finished. A program that goes on after the run leaves it `false`.
-    pub exit_after: bool,
 }
 
 impl RunOptions {
@@ -71,36 +67,49 @@ pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
         .transpose()?;
     let (mut gap, doublings) = (resume.as_ref().and_then(|s| s.candidate_gap), 8);
     let store = crate::cache::Store::resolve(&opts.cache, opts.level() >= LogLevel::Warn);
-    for _ in 0..doublings {
-        let mut model = Model::build_cached(&case, case_path, gap, store.as_ref().ok())?;
-        if let Err(off) = &store {
-            model.cache = Some(off.clone());
-        }
-        let resumed = resume.is_some();
-        match run_model(&case, case_path, model, &out_dir, opts, resume.take()) {
-            Err(RunError::ZoneClipped { gap: g, step }) if resumed => {
-                return Err(RunError::Resume {
-                    path: opts.resume.as_ref().expect("resumed").display().to_string(),
-                    why: format!(
-                        "the contact reached the edge of the candidate zone at step {step} \
-                         (candidate gap {g:.3e}): run the case again from the start"
-                    ),
-                });
+    // The run's identity (a hash of the case and mesh files, which the restart states carry:
+    // 25 ms at L7) on a thread of its own while the model is built, whose first phases leave
+    // a core idle.
+    let case = &case;
+    std::thread::scope(|scope| {
+        let id_job = scope.spawn(|| restart::run_id(case, case_path));
+        let mut id_job = Some(id_job);
+        let mut id = None;
+        for _ in 0..doublings {
+            let mut model = Model::build_cached(case, case_path, gap, store.as_ref().ok())?;
+            if let Err(off) = &store {
+                model.cache = Some(off.clone());
             }
-            Err(RunError::ZoneClipped { gap: g, step }) => {
-                if !opts.quiet {
-                    eprintln!(
-                        "note: the contact reached the edge of the candidate zone at step {step} (candidate gap {g:.3e}); doubling the zone and starting again"
-                    );
+            if let Some(job) = id_job.take() {
+                id = Some(job.join().expect("the run-id thread does not panic")?);
+            }
+            let id = id.clone().expect("joined");
+            let resumed = resume.is_some();
+            match run_model(case, case_path, model, &out_dir, opts, resume.take(), id) {
+                Err(RunError::ZoneClipped { gap: g, step }) if resumed => {
+                    return Err(RunError::Resume {
+                        path: opts.resume.as_ref().expect("resumed").display().to_string(),
+                        why: format!(
+                            "the contact reached the edge of the candidate zone at step {step} \
+                             (candidate gap {g:.3e}): run the case again from the start"
+                        ),
+                    });
                 }
-                gap = Some(2.0 * g);
+                Err(RunError::ZoneClipped { gap: g, step }) => {
+                    if !opts.quiet {
+                        eprintln!(
+                            "note: the contact reached the edge of the candidate zone at step {step} (candidate gap {g:.3e}); doubling the zone and starting again"
+                        );
+                    }
+                    gap = Some(2.0 * g);
+                }
+                other => return other,
             }
-            other => return other,
         }
-    }
-    Err(RunError::ZoneKeptGrowing {
-        gap: gap.unwrap_or(f64::NAN),
-        doublings,
+        Err(RunError::ZoneKeptGrowing {
+            gap: gap.unwrap_or(f64::NAN),
+            doublings,
+        })
     })
 }
 
@@ -115,7 +124,8 @@ fn nominal_steps_done(case: &Case, time: f64) -> f64 {
     done
 }
 
-/// Steps through the stages of a built model, writing output to `out_dir`.
+/// Steps through the stages of a built model, writing output to `out_dir`; `id` is the run's
+/// identity ([`restart::run_id`]), which its restart states carry.
 pub fn run_model(
     case: &Case,
     case_path: &Path,
@@ -123,6 +133,7 @@ pub fn run_model(
     out_dir: &Path,
     opts: &RunOptions,
     resume: Option<SavedRun>,
+    id: String,
 ) -> Result<Summary, RunError> {
     if let (Some(s), Some(cm)) = (&resume, &model.contact)
         && s.checkpoint
@@ -140,7 +151,6 @@ pub fn run_model(
             why: "its contact state does not fit the model built from the case".into(),
         });
     }
-    let id = restart::run_id(case, case_path)?;
     std::fs::create_dir_all(out_dir).map_err(|source| RunError::Write {
         path: out_dir.display().to_string(),
         source,
@@ -287,14 +297,6 @@ pub fn run_model(
     }
     if let Some(e) = failure {
         return Err(e);
-    }
-    if opts.exit_after {
-        // The model cache's entry is finished (its `Drop` waits for the writer); the rest of
-        // the model's memory goes back to the system with the process. Freed buffer by buffer
-        // it took 80–90 ms at L7 (1.3 GB: the unmaps interrupt the other core to flush its
-        // TLB), 5 % of what the run does after the factorisation.
-        drop(model.cache_job.take());
-        std::mem::forget(model);
     }
     Ok(summary)
 }

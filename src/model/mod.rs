@@ -107,7 +107,7 @@ pub struct Model {
     /// The cache entry being written in the background: held for its `Drop`, which waits for
     /// the write when the model is dropped.
     #[allow(dead_code)]
-    pub(crate) cache_job: Option<crate::cache::Job>,
+    cache_job: Option<crate::cache::Job>,
     /// The factorised Delassus blocks shared by the simulations of this model once
     /// [`Model::share_contact_blocks`] has been called (a sweep does).
     contact_blocks: std::sync::OnceLock<std::sync::Arc<crate::contact::solver::BlockStore>>,
