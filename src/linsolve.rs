@@ -1040,9 +1040,16 @@ impl SaddleFactor {
             -1.0,
             factor_parallelism(),
         );
-        for j in 0..m {
-            for i in j + 1..m {
-                w[(j, i)] = w[(i, j)];
+        // The upper half from the lower, in tiles (so that the transposed writes stay in
+        // cache: 130 MB at L7).
+        const TILE: usize = 64;
+        for jb in (0..m).step_by(TILE) {
+            for ib in (jb..m).step_by(TILE) {
+                for j in jb..(jb + TILE).min(m) {
+                    for i in (j + 1).max(ib)..(ib + TILE).min(m) {
+                        w[(j, i)] = w[(i, j)];
+                    }
+                }
             }
         }
         if !keep_factor {
@@ -1052,7 +1059,6 @@ impl SaddleFactor {
         // j, scaled by (−d_j)^½ (in tiles, so that the transposed reads stay in cache); the
         // strict upper half is cleared.
         let s: Vec<f64> = (0..m).map(|j| (-l[(j, j)]).sqrt()).collect();
-        const TILE: usize = 64;
         for jb in (0..m).step_by(TILE) {
             for ib in (jb..m).step_by(TILE) {
                 for j in jb..(jb + TILE).min(m) {

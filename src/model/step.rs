@@ -88,8 +88,7 @@ impl Model {
             .par_iter()
             .enumerate()
             .map(|(i, (e, mat))| {
-                let nodes = &self.mesh.triangles[*e].nodes;
-                let ue: [f64; 12] = self.dofs.element_displacement(nodes, u);
+                let ue: [f64; 12] = self.element_u(i, u);
                 let (fe, kmax) = match kept {
                     Some(g) => element_forces_with(&g[i], &ue, mat),
                     None => element_forces(&self.mesh.tri_coords(*e), &ue, mat),
