@@ -3,7 +3,9 @@
 //!
 //! An entry holds, in this order: sizes and scalars (`META`), the fill-reducing ordering of
 //! the free DOFs, the grounded DOFs and their springs, the forces of the prescribed
-//! displacements; for a contact model the Delassus operator `W`, the condensed loads `w0` (of
+//! displacements; for a contact model the Delassus operator `W` (with, from
+//! [`crate::contact::solver::PREFIX_FROM`] contact unknowns, the order of the constraint rows
+//! and the packed Cholesky factor of `W` in it), the condensed loads `w0` (of
 //! the tractions, with the traction forces they belong to, and of the prescribed
 //! displacements) and the supernodal layout of the factor's leading block (the free DOFs'
 //! columns and rows, [`crate::linsolve::Supernodes::leading`]: a hit needs no symbolic
