@@ -315,6 +315,28 @@ pub enum Words {
     Columns(std::sync::Arc<dyn DenseColumns>, Vec<(usize, usize)>),
 }
 
+/// Calls `f` with the little-endian bytes of `pieces` (each at most `longest` floats), one after
+/// the other, gathered into chunks of about [`CHUNK`] bytes.
+#[cfg(all(target_endian = "little", target_pointer_width = "64"))]
+fn in_chunks<'a>(
+    pieces: impl Iterator<Item = &'a [f64]>,
+    longest: usize,
+    mut f: impl FnMut(&[u8]) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let mut buf = Vec::with_capacity(CHUNK + 8 * longest);
+    for p in pieces {
+        buf.extend_from_slice(bytemuck::cast_slice(p));
+        if buf.len() >= CHUNK {
+            f(&buf)?;
+            buf.clear();
+        }
+    }
+    if !buf.is_empty() {
+        f(&buf)?;
+    }
+    Ok(())
+}
+
 /// A dense column-major matrix whose columns a cache entry can be written from.
 pub trait DenseColumns: Send + Sync {
     fn rows(&self) -> usize;
@@ -384,34 +406,14 @@ impl Words {
                 Words::Usize(v) => bytemuck::cast_slice(v),
                 Words::F64(v) => bytemuck::cast_slice(v),
                 Words::Shared(v) => bytemuck::cast_slice(&v[..]),
+                // Short pieces (a column each): gathered a chunk at a time.
                 Words::Gathered(v, ranges) => {
-                    // The ranges are short (a column each): gathered a chunk at a time.
-                    let mut buf = Vec::with_capacity(CHUNK + 8 * 1024);
-                    for &(a, len) in ranges {
-                        buf.extend_from_slice(bytemuck::cast_slice(&v[a..a + len]));
-                        if buf.len() >= CHUNK {
-                            f(&buf)?;
-                            buf.clear();
-                        }
-                    }
-                    if !buf.is_empty() {
-                        f(&buf)?;
-                    }
-                    return Ok(());
+                    let pieces = ranges.iter().map(|&(a, len)| &v[a..a + len]);
+                    return in_chunks(pieces, 1024, f);
                 }
                 Words::Columns(m, cols) => {
-                    let mut buf = Vec::with_capacity(CHUNK + 8 * m.rows());
-                    for &(j, from) in cols {
-                        buf.extend_from_slice(bytemuck::cast_slice(m.column(j, from)));
-                        if buf.len() >= CHUNK {
-                            f(&buf)?;
-                            buf.clear();
-                        }
-                    }
-                    if !buf.is_empty() {
-                        f(&buf)?;
-                    }
-                    return Ok(());
+                    let pieces = cols.iter().map(|&(j, from)| m.column(j, from));
+                    return in_chunks(pieces, m.rows(), f);
                 }
             };
             for c in bytes.chunks(CHUNK) {

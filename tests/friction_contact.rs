@@ -550,29 +550,14 @@ fn figure_3_with_the_law_implied_by_double_cattaneo_mindlin() {
 /// factorised for more unknowns than the system has (nodes that left the contact).
 #[test]
 fn structured_newton_solve_matches_the_dense_system() {
-    use stickslip::case::Control;
     use stickslip::contact::solver::{Iterate, LuCache, Method, PilotDrive, Status};
     use stickslip::friction::FrictionLaw;
-    use stickslip::model::StepLoad;
     let law = FrictionLaw::ramp(0.15, 0.1, 2e-3).unwrap();
     let (model, opt) = fig2_on_l1();
     let cm = model.contact.as_ref().unwrap();
     let mut st = cm.system.initial_state();
     for q in [0.0, 0.3, 0.6, 0.7] {
-        st = model
-            .solve_contact_step(
-                StepLoad {
-                    scale: 0.0,
-                    control: [Control::Force(q), Control::Force(-10.0)],
-                },
-                &st,
-                None,
-                &opt,
-                Some(&law),
-                None,
-            )
-            .unwrap()
-            .state;
+        st = force_step(&model, &st, q, &opt, &law, None).unwrap().state;
     }
     let ns = cm.system.ns;
     // An iterate off the solution, so that slip rows have μ' ≠ 0 and Δv ≠ 0.
@@ -710,6 +695,34 @@ fn fig2_on_l1() -> (stickslip::model::Model, stickslip::contact::solver::Options
     (model, opt)
 }
 
+/// One contact step from `st` under Fig. 2's normal load P = 10 and the tangential force `q`.
+fn force_step(
+    model: &stickslip::model::Model,
+    st: &stickslip::contact::solver::State,
+    q: f64,
+    opt: &stickslip::contact::solver::Options,
+    law: &stickslip::friction::FrictionLaw,
+    cache: Option<&mut stickslip::contact::solver::LuCache>,
+) -> Result<stickslip::contact::solver::StepOutcome, stickslip::contact::solver::ContactError> {
+    use stickslip::case::Control;
+    let load = stickslip::model::StepLoad {
+        scale: 0.0,
+        control: [Control::Force(q), Control::Force(-10.0)],
+    };
+    model.solve_contact_step(load, st, None, opt, Some(law), cache)
+}
+
+/// Fig. 2's case on mesh L4 with the lower and upper bodies' (E, ν), built.
+fn fig2_on_l4(lower: (f64, f64), upper: (f64, f64)) -> stickslip::model::Model {
+    let mut v = shipped_case_on("fig2.json", "vm272_L4.msh");
+    v["bodies"][0]["E"] = json!(lower.0);
+    v["bodies"][0]["nu"] = json!(lower.1);
+    v["bodies"][1]["E"] = json!(upper.0);
+    v["bodies"][1]["nu"] = json!(upper.1);
+    let case: stickslip::case::Case = serde_json::from_value(v).unwrap();
+    stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap()
+}
+
 /// A frictional first contact (every node open before the step) starts from the frictionless
 /// contact set, so that the Delassus block it factorises has the unknowns of the contact,
 /// not of every candidate. The step's answer must not depend on that start: Fig. 2's normal
@@ -726,13 +739,7 @@ fn first_contact_from_the_frictionless_set_gives_the_same_step() {
         ("identical", (200.0, 0.3), (200.0, 0.3)),
         ("steel on copper", (207.0, 0.3), (110.0, 0.34)),
     ] {
-        let mut v = shipped_case_on("fig2.json", "vm272_L4.msh");
-        v["bodies"][0]["E"] = json!(lower.0);
-        v["bodies"][0]["nu"] = json!(lower.1);
-        v["bodies"][1]["E"] = json!(upper.0);
-        v["bodies"][1]["nu"] = json!(upper.1);
-        let case: stickslip::case::Case = serde_json::from_value(v).unwrap();
-        let model = stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap();
+        let model = fig2_on_l4(lower, upper);
         let (_, mut opt) = fig2_on_l1();
         // 1e-12 floors in the dense solve of the dissimilar pair (updates ≈ 3e-11).
         opt.tolerance = 1e-10;
@@ -804,23 +811,14 @@ fn first_contact_from_the_frictionless_set_gives_the_same_step() {
 /// stick blocks taken from the prefix factor.
 #[test]
 fn delassus_blocks_from_the_prefix_factor_give_the_same_steps() {
-    use stickslip::case::Control;
     use stickslip::contact::solver::{LuCache, PrefixFactor, prefix_order};
     use stickslip::friction::FrictionLaw;
-    use stickslip::model::StepLoad;
     let law = FrictionLaw::ramp(0.15, 0.1, 0.05).unwrap();
     for (name, lower, upper) in [
         ("identical", (200.0, 0.3), (200.0, 0.3)),
         ("steel on copper", (207.0, 0.3), (110.0, 0.34)),
     ] {
-        let mut v = shipped_case_on("fig2.json", "vm272_L4.msh");
-        v["bodies"][0]["E"] = json!(lower.0);
-        v["bodies"][0]["nu"] = json!(lower.1);
-        v["bodies"][1]["E"] = json!(upper.0);
-        v["bodies"][1]["nu"] = json!(upper.1);
-        let case: stickslip::case::Case = serde_json::from_value(v).unwrap();
-        let mut model =
-            stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap();
+        let mut model = fig2_on_l4(lower, upper);
         let (_, mut opt) = fig2_on_l1();
         opt.tolerance = 1e-10;
         let cm = model.contact.as_ref().unwrap();
@@ -840,18 +838,7 @@ fn delassus_blocks_from_the_prefix_factor_give_the_same_steps() {
             let mut st = model.contact.as_ref().unwrap().system.initial_state();
             let mut states = Vec::new();
             for q in [0.0, 0.01875, 0.05625, 0.13125, 0.28125, 0.43125] {
-                st = model
-                    .solve_contact_step(
-                        StepLoad {
-                            scale: 0.0,
-                            control: [Control::Force(q), Control::Force(-10.0)],
-                        },
-                        &st,
-                        None,
-                        &opt,
-                        Some(&law),
-                        Some(&mut cache),
-                    )
+                st = force_step(&model, &st, q, &opt, &law, Some(&mut cache))
                     .unwrap_or_else(|e| panic!("{name}: Q = {q}: {e}"))
                     .state;
                 states.push(st.clone());
