@@ -138,7 +138,7 @@ fn leading_set(pf: &PrefixFactor, unk: &[usize]) -> Option<usize> {
         return None;
     }
     let p = unk.iter().map(|&u| pf.pos[u]).max()? + 1;
-    (p - unk.len() <= p / 64).then_some(p)
+    (p.checked_sub(unk.len())? <= p / 64).then_some(p)
 }
 
 impl Block {
