@@ -8,7 +8,8 @@
 # cold: every run with --no-cache (the whole build of the model); first: every run with a fresh
 # cache directory (the whole build, and the entry written: a user's first run); warm: each
 # binary has its own fresh cache directory, filled by one untimed run, and the N timed runs are
-# hits.
+# hits. cold-first: side A cold, side B first (with A = B, what writing the cache entry costs
+# a first run).
 # ENV_A / ENV_B: space-separated VAR=value assignments for each side (e.g. the ordering:
 # `STICKSLIP_ORDERING=amd` against `STICKSLIP_ORDERING=nd` with the same binary).
 #
@@ -19,9 +20,11 @@ set -euo pipefail
 N=$1 A=$2 B=$3 CASE=${4:-cases/fig2.json} MODE=${5:-cold} EA=${6:-} EB=${7:-}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-case "$MODE" in cold | first | warm) ;; *) echo "ab.sh: MODE must be cold, first or warm" >&2; exit 2 ;; esac
+case "$MODE" in cold | first | warm | cold-first) ;; *) echo "ab.sh: MODE must be cold, first, warm or cold-first" >&2; exit 2 ;; esac
+# The mode of side $1.
+mode_of() { if [ "$MODE" = cold-first ]; then [ "$1" = A ] && echo cold || echo first; else echo "$MODE"; fi; }
 args() { # side
-  case "$MODE" in
+  case "$(mode_of "$1")" in
     warm | first) echo "--cache $work/cache_$1" ;;
     *) echo "--no-cache" ;;
   esac
@@ -29,7 +32,7 @@ args() { # side
 run() { # side bin env
   local t0 t1
   # A first run starts from an empty cache directory (removed before the clock starts).
-  if [ "$MODE" = first ]; then rm -rf "$work/cache_$1"; fi
+  if [ "$(mode_of "$1")" = first ]; then rm -rf "$work/cache_$1"; fi
   t0=$(date +%s%N)
   env $3 "$2" run "$CASE" --out "$work/out_$1" --quiet --threads "${STICKSLIP_THREADS:-2}" $(args "$1") >/dev/null
   t1=$(date +%s%N)

@@ -72,20 +72,26 @@ pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
     // a core idle.
     let case = &case;
     std::thread::scope(|scope| {
-        let id_job = scope.spawn(|| restart::run_id(case, case_path));
-        let mut id_job = Some(id_job);
-        let mut id = None;
+        let mut id_job = Some(scope.spawn(|| restart::run_id(case, case_path)));
+        let mut id = String::new();
         for _ in 0..doublings {
             let mut model = Model::build_cached(case, case_path, gap, store.as_ref().ok())?;
             if let Err(off) = &store {
                 model.cache = Some(off.clone());
             }
             if let Some(job) = id_job.take() {
-                id = Some(job.join().expect("the run-id thread does not panic")?);
+                id = job.join().expect("the run-id thread does not panic")?;
             }
-            let id = id.clone().expect("joined");
             let resumed = resume.is_some();
-            match run_model(case, case_path, model, &out_dir, opts, resume.take(), id) {
+            match run_model(
+                case,
+                case_path,
+                model,
+                &out_dir,
+                opts,
+                resume.take(),
+                id.clone(),
+            ) {
                 Err(RunError::ZoneClipped { gap: g, step }) if resumed => {
                     return Err(RunError::Resume {
                         path: opts.resume.as_ref().expect("resumed").display().to_string(),

@@ -105,8 +105,9 @@ fn partial_factorisation_gives_the_schur_complement() {
 }
 
 /// The fields of several contact states from one block solve (as a sweep recovers them for its
-/// self-checks) equal those of one solve each, bit for bit: each column sees the same
-/// operations in the same order.
+/// self-checks, split over the threads, or the output writer, in one sweep) equal those of one
+/// solve each, bit for bit: each column sees the same operations in the same order. The
+/// per-element displacement table gives each element's displacements as the DOF map does.
 #[test]
 fn block_recovery_and_kept_element_matrices_equal_the_one_by_one_computation() {
     let (model, sim) = cm_on_l1(&mut |_| Ok(()));
@@ -137,6 +138,22 @@ fn block_recovery_and_kept_element_matrices_equal_the_one_by_one_computation() {
         assert!(one.iter().any(|v| *v != 0.0), "column {k} is zero");
     }
     assert_ne!(block[0], block[2], "the three right-hand sides must differ");
+    // The same block in one sweep on this thread (as the output writer recovers a batch).
+    let one_sweep = model.contact_displacements(&states, false);
+    for (a, b) in block.iter().zip(&one_sweep) {
+        assert!(a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits()));
+    }
+    // Each element's displacements through the model's per-element table are those the DOF
+    // map gives node by node (free DOFs, and the supports' prescribed values).
+    let u = &block[0];
+    for (i, (e, _)) in model.elems.iter().enumerate() {
+        let nodes = &model.mesh.triangles[*e].nodes;
+        assert_eq!(
+            model.element_u(i, u),
+            model.dofs.element_displacement(nodes, u),
+            "element {e}"
+        );
+    }
 }
 
 /// The shipped Cattaneo–Mindlin case on `vm272_L1`: its model and its simulation (`on_step`

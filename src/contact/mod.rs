@@ -100,9 +100,9 @@ impl ContactModel {
         }
         .map(|(w, c)| match (c, order) {
             (Some(c), Some(order)) => {
-                let mut w = w;
-                to_mu_order(&mut w, &order);
-                (w, Some(solver::PrefixFactor::new(c, order)))
+                let (mut w, pf) = (w, solver::PrefixFactor::new(c, order));
+                to_mu_order(&mut w, &pf.pos);
+                (w, Some(pf))
             }
             (_, _) => (w, None),
         })
@@ -190,20 +190,17 @@ impl ContactModel {
     }
 }
 
-/// Reorders in place a symmetric `w` given in the order `order` (`w[a, b]` the entry of the
-/// unknowns `order[a]`, `order[b]`) into the natural order of the unknowns: the rows of each
-/// column first, then the columns by the cycles of the permutation (one spare column: the
-/// Delassus operator is 130 MB at L7, and a second copy would raise the run's peak memory).
-fn to_mu_order(w: &mut faer::Mat<f64>, order: &[usize]) {
-    let m = order.len();
-    let mut pos = vec![0; m];
-    for (k, &i) in order.iter().enumerate() {
-        pos[i] = k;
-    }
+/// Reorders in place a symmetric `w` given in an order of its unknowns (`w[a, b]` the entry
+/// of the unknowns at positions `a`, `b`; `pos[i]` the position of unknown `i`) into their
+/// natural order: the rows of each column first, then the columns by the cycles of the
+/// permutation (one spare column: the Delassus operator is 130 MB at L7, and a second copy
+/// would raise the run's peak memory).
+fn to_mu_order(w: &mut faer::Mat<f64>, pos: &[usize]) {
+    let m = pos.len();
     let mut tmp = vec![0.0; m];
     for j in 0..m {
         let col = w.col(j);
-        for (t, &p) in tmp.iter_mut().zip(&pos) {
+        for (t, &p) in tmp.iter_mut().zip(pos) {
             *t = col[p];
         }
         w.col_mut(j).iter_mut().zip(&tmp).for_each(|(x, t)| *x = *t);
@@ -225,10 +222,9 @@ fn to_mu_order(w: &mut faer::Mat<f64>, order: &[usize]) {
                 w.col_mut(j).iter_mut().zip(&tmp).for_each(|(x, t)| *x = *t);
                 break;
             }
-            let (src, dst) = (k, j);
             for i in 0..m {
-                let v = w[(i, src)];
-                w[(i, dst)] = v;
+                let v = w[(i, k)];
+                w[(i, j)] = v;
             }
             j = k;
         }
@@ -278,7 +274,8 @@ mod tests {
             (1 + i.min(j)) as f64 * 10.0 + (i.max(j)) as f64
         });
         let mut w = faer::Mat::from_fn(m, m, |a, b| natural[(order[a], order[b])]);
-        super::to_mu_order(&mut w, &order);
+        let pos = super::solver::PrefixFactor::new(faer::Mat::zeros(1, 1), order.to_vec()).pos;
+        super::to_mu_order(&mut w, &pos);
         for i in 0..m {
             for j in 0..m {
                 assert_eq!(w[(i, j)], natural[(i, j)], "({i}, {j})");
