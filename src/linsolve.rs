@@ -839,15 +839,9 @@ fn sweep_leading(nodes: &[(usize, usize, usize, Node<'_>)], x: &mut [f64], size:
             }
         }
     }
-    // D.
-    for (start, wk, _, node) in nodes {
-        for x in x.chunks_exact_mut(size) {
-            for c in 0..*wk {
-                x[start + c] /= node.at(c, c);
-            }
-        }
-    }
-    // Backward: L_KKᵀ x = y; the pattern's values gathered into `t` once.
+    // D and backward: x = L_KK⁻ᵀ D⁻¹ y, supernode by supernode from the last; the pattern's
+    // values gathered into `t` once. Each entry is divided by its pivot just before its own
+    // column is read (a pass of its own over the diagonals cost a cache miss per column).
     for (start, wk, kp, node) in nodes.iter().rev() {
         let (pat, w) = (&node.pattern[..*kp], node.ncols);
         for x in x.chunks_exact_mut(size) {
@@ -857,7 +851,7 @@ fn sweep_leading(nodes: &[(usize, usize, usize, Node<'_>)], x: &mut [f64], size:
                 let col = node.col(c);
                 // Both sums as (vectorised) dot products: the one over the diagonal block
                 // was a chain of dependent scalar updates, most of the sweep's time.
-                let mut acc = x[start + c];
+                let mut acc = x[start + c] / col[c];
                 acc -= dot(&col[c + 1..*wk], &x[start + c + 1..start + wk]);
                 acc -= dot(&col[w..w + kp], &t);
                 x[start + c] = acc;
