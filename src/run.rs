@@ -251,8 +251,9 @@ pub fn run_model(
         {
             writer.send(w)?;
         }
-        // The summary and its checks (a recovery solve of their own) while the writer writes
-        // the last steps.
+        // The steps still waiting for the writer: this thread prepares them from the last
+        // while the writer finishes those it has; then the summary and its checks.
+        writer.help();
         let mut sim = sim;
         if let Some((step, rx)) = last_u
             && sim.last_u.is_none()

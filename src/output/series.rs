@@ -18,8 +18,10 @@ use crate::contact::solver::State;
 use crate::error::RunError;
 use crate::model::Model;
 use crate::restart::{self, SavedRun};
+use std::collections::{HashMap, VecDeque};
 use std::path::{Path, PathBuf};
-use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::sync::mpsc::SyncSender;
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock};
 use std::thread::{Scope, ScopedJoinHandle};
 use std::time::Instant;
 
@@ -58,18 +60,107 @@ pub struct StepOutput {
     pub reply: Option<SyncSender<Vec<f64>>>,
 }
 
-/// Steps the writer takes at once at most, and the depth of its channel.
+/// Steps the writer takes at once at most, and the steps that may wait in its queue.
 pub const BATCH: usize = 2;
 
-/// The writer of a run's series of steps.
-pub struct Series<'a> {
+/// What writing a step's bodies dataset needs, shared by the writer thread and the driver's
+/// thread (which prepares the last steps itself once it has no more to solve).
+#[derive(Clone)]
+struct Bodies<'a> {
     model: &'a Model,
     dir: &'a Path,
     stem: &'a str,
     /// zlib-compressed `.vtu` arrays (`output.compress`).
     compress: bool,
     /// The points and cells of the bodies dataset (built at the first write).
-    mesh: Option<BodiesMesh>,
+    mesh: Arc<OnceLock<BodiesMesh>>,
+}
+
+/// Steps whose bodies datasets are written to their temporary names (or failed), to be put in
+/// place in order with the steps' other files ([`Series::commit`]).
+pub struct Prepared {
+    steps: Vec<StepOutput>,
+    bodies: Vec<Result<(PathBuf, String), RunError>>,
+    /// Seconds the preparation took.
+    seconds: f64,
+}
+
+impl Prepared {
+    /// Removes the temporary files (the steps will not be written).
+    fn discard(self) {
+        for (tmp, _) in self.bodies.into_iter().flatten() {
+            let _ = std::fs::remove_file(tmp);
+        }
+    }
+}
+
+impl Bodies<'_> {
+    /// The fields of `steps` (recovered from their contact states in one block solve, on all
+    /// threads with `spread`, else in one sweep on this thread), sent to the steps that asked
+    /// for them, and their bodies datasets written side by side to their temporary names.
+    fn prepare(&self, steps: Vec<StepOutput>, spread: bool) -> Prepared {
+        use rayon::prelude::*;
+        let t = Instant::now();
+        crate::trace::mark(format_args!(
+            "prepare {} from step {}",
+            steps.len(),
+            steps.first().map_or(0, |s| s.step)
+        ));
+        let model = self.model;
+        let states: Vec<(f64, &State)> = steps
+            .iter()
+            .filter(|s| s.u.is_none())
+            .map(|s| {
+                let st = s.contact.as_ref();
+                (
+                    s.scale,
+                    st.expect("a step has a solution or a contact state"),
+                )
+            })
+            .collect();
+        let mut recovered = model.contact_displacements(&states, spread).into_iter();
+        let fields: Vec<std::borrow::Cow<[f64]>> = steps
+            .iter()
+            .map(|s| match &s.u {
+                Some(u) => std::borrow::Cow::Borrowed(u.as_slice()),
+                None => std::borrow::Cow::Owned(recovered.next().expect("one field per state")),
+            })
+            .collect();
+        for (s, u) in steps.iter().zip(&fields) {
+            if let Some(tx) = &s.reply {
+                // The driver may have stopped waiting (it failed): nothing to do then.
+                let _ = tx.send(u.to_vec());
+            }
+        }
+        crate::trace::mark("fields recovered");
+        let point_data: Vec<Vec<Field>> =
+            fields.par_iter().map(|u| bodies_fields(model, u)).collect();
+        crate::trace::mark("point fields");
+        let mesh = self.mesh.get_or_init(|| BodiesMesh::new(model));
+        let (dir, stem, compress) = (self.dir, self.stem, self.compress);
+        let bodies = steps
+            .par_iter()
+            .zip(&point_data)
+            .map(|(s, data)| {
+                let name = format!("{stem}_{:04}.vtu", s.step);
+                let path = dir.join(&name);
+                let tmp = super::write_temporary(&path, &bodies_vtu(mesh, data, compress).parts())
+                    .map_err(|source| write_error(&path, source))?;
+                Ok((tmp, name))
+            })
+            .collect();
+        crate::trace::mark("bodies files prepared");
+        Prepared {
+            steps,
+            bodies,
+            seconds: t.elapsed().as_secs_f64(),
+        }
+    }
+}
+
+/// The writer of a run's series of steps.
+pub struct Series<'a> {
+    bodies: Bodies<'a>,
     entries: Vec<PvdEntry>,
     /// Seconds spent writing so far.
     pub seconds: f64,
@@ -78,11 +169,13 @@ pub struct Series<'a> {
 impl<'a> Series<'a> {
     pub fn new(model: &'a Model, dir: &'a Path, stem: &'a str, compress: bool) -> Self {
         Series {
-            model,
-            dir,
-            stem,
-            compress,
-            mesh: None,
+            bodies: Bodies {
+                model,
+                dir,
+                stem,
+                compress,
+                mesh: Arc::default(),
+            },
             entries: Vec::new(),
             seconds: 0.0,
         }
@@ -102,69 +195,27 @@ impl<'a> Series<'a> {
     /// Writes the files of converged steps, in order: per step its bodies dataset (the
     /// fields from the free solution or, with contact, recovered from the contact state), its
     /// contact dataset and CSV, the rewritten `.pvd`, then its restart state if it has one.
+    /// A batch with a step whose field is asked for (the last, which the driver waits for)
+    /// is recovered on all threads, else in one sweep on this one (the other core is the
+    /// contact solve's).
     pub fn write(&mut self, steps: Vec<StepOutput>) -> Result<(), RunError> {
-        use rayon::prelude::*;
-        let t = Instant::now();
-        crate::trace::mark(format_args!(
-            "write batch of {} from step {}",
-            steps.len(),
-            steps.first().map_or(0, |s| s.step)
-        ));
-        let model = self.model;
-        // The fields recovered from contact states: one block solve for the batch.
-        let states: Vec<(f64, &State)> = steps
-            .iter()
-            .filter(|s| s.u.is_none())
-            .map(|s| {
-                let st = s.contact.as_ref();
-                (
-                    s.scale,
-                    st.expect("a step has a solution or a contact state"),
-                )
-            })
-            .collect();
-        // While the driver solves the next steps, the batch is recovered in one sweep on this
-        // thread (the factor read once, the other core left to the contact solve); a batch
-        // with the last step, which the driver waits for, on all threads.
         let spread = steps.iter().any(|s| s.reply.is_some());
-        let mut recovered = model.contact_displacements(&states, spread).into_iter();
-        let fields: Vec<std::borrow::Cow<[f64]>> = steps
-            .iter()
-            .map(|s| match &s.u {
-                Some(u) => std::borrow::Cow::Borrowed(u.as_slice()),
-                None => std::borrow::Cow::Owned(recovered.next().expect("one field per state")),
-            })
-            .collect();
-        for (s, u) in steps.iter().zip(&fields) {
-            if let Some(tx) = &s.reply {
-                // The driver may have stopped waiting (it failed): nothing to do then.
-                let _ = tx.send(u.to_vec());
-            }
-        }
-        crate::trace::mark("fields recovered");
-        let point_data: Vec<Vec<Field>> =
-            fields.par_iter().map(|u| bodies_fields(model, u)).collect();
-        crate::trace::mark("point fields");
-        // Taken out while the files are written, which borrows `self`.
-        let mesh = self.mesh.take().unwrap_or_else(|| BodiesMesh::new(model));
-        // The bodies files (the bulk of the bytes) of the batch are written in parallel, each
-        // to its temporary name; then, step by step in order, each is renamed into place and
-        // followed by the step's other files, the `.pvd` and the restart state. A step that
-        // fails stops the batch there, as if its steps were written one by one: the later
-        // steps' temporary files are removed, and no file of theirs is touched.
-        let (dir, stem, compress) = (self.dir, self.stem, self.compress);
-        let bodies: Vec<Result<(PathBuf, String), RunError>> = steps
-            .par_iter()
-            .zip(&point_data)
-            .map(|(s, data)| {
-                let name = format!("{stem}_{:04}.vtu", s.step);
-                let path = dir.join(&name);
-                let tmp = super::write_temporary(&path, &bodies_vtu(&mesh, data, compress).parts())
-                    .map_err(|source| write_error(&path, source))?;
-                Ok((tmp, name))
-            })
-            .collect();
-        self.mesh = Some(mesh);
+        let prepared = self.bodies.prepare(steps, spread);
+        self.commit(prepared)
+    }
+
+    /// Puts prepared steps in place, in order: each bodies file renamed from its temporary
+    /// name, followed by the step's other files, the `.pvd` and the restart state. A step
+    /// that fails stops there, as if the steps were written one by one: the later steps'
+    /// temporary files are removed, and no file of theirs is touched.
+    fn commit(&mut self, prepared: Prepared) -> Result<(), RunError> {
+        let t = Instant::now();
+        let Prepared {
+            steps,
+            bodies,
+            seconds,
+        } = prepared;
+        let dir = self.bodies.dir;
         let mut bodies = bodies.into_iter();
         for s in steps {
             let written =
@@ -184,14 +235,16 @@ impl<'a> Series<'a> {
                 return Err(e);
             }
         }
-        self.seconds += t.elapsed().as_secs_f64();
+        self.seconds += seconds + t.elapsed().as_secs_f64();
         crate::trace::mark("batch written");
         Ok(())
     }
 
     /// Writes one step's files after its bodies dataset (written as `name`).
     fn write_files(&mut self, s: StepOutput, name: String) -> Result<(), RunError> {
-        let (model, stem, step) = (self.model, self.stem, s.step);
+        let (model, stem, step) = (self.bodies.model, self.bodies.stem, s.step);
+        let dir = self.bodies.dir;
+        let compress = self.bodies.compress;
         self.entries.push(PvdEntry {
             time: s.time,
             part: 0,
@@ -199,29 +252,23 @@ impl<'a> Series<'a> {
         });
         if let Some(st) = &s.contact {
             let cname = format!("{stem}_contact_{step:04}.vtu");
-            write_file(
-                &self.dir.join(&cname),
-                &contact_vtu(model, st, self.compress),
-            )?;
+            write_file(&dir.join(&cname), &contact_vtu(model, st, compress))?;
             self.entries.push(PvdEntry {
                 time: s.time,
                 part: 1,
                 file: cname,
             });
             write_file(
-                &self.dir.join(format!("contact_{step:04}.csv")),
+                &dir.join(format!("contact_{step:04}.csv")),
                 contact_csv(model, st).as_bytes(),
             )?;
         }
-        write_file(
-            &self.dir.join(format!("{stem}.pvd")),
-            pvd(&self.entries).as_bytes(),
-        )?;
+        write_file(&dir.join(format!("{stem}.pvd")), pvd(&self.entries).as_bytes())?;
         // The state to resume from, after the step's files.
         if let Some(mut saved) = s.state {
             saved.pvd = self.entries.clone();
             write_file(
-                &self.dir.join(restart::state_name(step)),
+                &dir.join(restart::state_name(step)),
                 serde_json::to_string(&saved)
                     .expect("serialisable")
                     .as_bytes(),
@@ -231,40 +278,94 @@ impl<'a> Series<'a> {
     }
 }
 
-/// A [`Series`] written on a thread of its own, fed through a channel of depth [`BATCH`]: the
-/// driver hands it a step and goes on, and waits only when the channel is full.
-pub struct Background<'scope> {
-    tx: SyncSender<StepOutput>,
+/// An entry of the writer's queue: a step to write, or steps that the driver's thread took
+/// from the queue to prepare (the writer puts them in place in their turn).
+enum Item {
+    Step(StepOutput),
+    Taken(u64),
+}
+
+/// The queue between the driver and the writer thread.
+#[derive(Default)]
+struct Queue {
+    items: VecDeque<Item>,
+    /// Steps prepared by the driver's thread, by the number of their [`Item::Taken`].
+    done: HashMap<u64, Prepared>,
+    next_id: u64,
+    /// No more steps will come.
+    closed: bool,
+    /// The writer stopped on an error: nothing more is written.
+    stopped: bool,
+}
+
+impl Queue {
+    fn waiting_steps(&self) -> usize {
+        self.items
+            .iter()
+            .filter(|i| matches!(i, Item::Step(_)))
+            .count()
+    }
+}
+
+/// The queue and its signal (any change to it).
+#[derive(Default)]
+struct Shared {
+    queue: Mutex<Queue>,
+    changed: Condvar,
+}
+
+impl Shared {
+    fn lock(&self) -> MutexGuard<'_, Queue> {
+        self.queue.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn wait<'g>(&self, g: MutexGuard<'g, Queue>) -> MutexGuard<'g, Queue> {
+        self.changed.wait(g).unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// A [`Series`] written on a thread of its own, fed through a queue of [`BATCH`] steps: the
+/// driver hands it a step and goes on, and waits only when the queue is full. The writer takes
+/// the steps from the front of the queue, those waiting together (one block solve for their
+/// fields). When the driver has no more steps to solve it takes the steps still waiting from
+/// the back of the queue and prepares them itself ([`Self::finish`]), so that both cores
+/// write the last steps; the writer puts them in place in their turn.
+pub struct Background<'scope, 'env> {
+    shared: Arc<Shared>,
+    bodies: Bodies<'env>,
     /// The writer thread: its busy seconds, or its first error. `None` once joined.
     handle: Option<ScopedJoinHandle<'scope, Result<f64, RunError>>>,
     /// Seconds the caller spent waiting for the writer.
     wait: f64,
 }
 
-impl<'scope> Background<'scope> {
+impl<'scope, 'env> Background<'scope, 'env> {
     /// Starts the writer thread of `series` in `scope`.
-    pub fn spawn<'env>(scope: &'scope Scope<'scope, 'env>, mut series: Series<'env>) -> Self {
-        let (tx, rx): (_, Receiver<StepOutput>) = sync_channel(BATCH);
+    pub fn spawn(scope: &'scope Scope<'scope, 'env>, mut series: Series<'env>) -> Self {
+        let shared = Arc::new(Shared::default());
+        let bodies = series.bodies.clone();
+        let queue = shared.clone();
         let handle = std::thread::Builder::new()
             .name("stickslip-writer".into())
             .spawn_scoped(scope, move || {
-                while let Ok(first) = rx.recv() {
-                    // The steps queued behind it go in the same batch.
-                    let mut batch = vec![first];
-                    while batch.len() < BATCH {
-                        match rx.try_recv() {
-                            Ok(s) => batch.push(s),
-                            Err(_) => break,
-                        }
+                let written = writer_loop(&queue, &mut series);
+                if written.is_err() {
+                    // Nothing more is written: the steps prepared by the driver's thread lose
+                    // their temporary files (those it is still preparing, when it is done).
+                    let mut q = queue.lock();
+                    q.stopped = true;
+                    for (_, p) in q.done.drain() {
+                        p.discard();
                     }
-                    // The first error ends the thread (and drops the receiver).
-                    series.write(batch)?;
+                    q.items.clear();
+                    queue.changed.notify_all();
                 }
-                Ok(series.seconds)
+                written.map(|()| series.seconds)
             })
             .expect("the writer thread starts");
         Background {
-            tx,
+            shared,
+            bodies,
             handle: Some(handle),
             wait: 0.0,
         }
@@ -279,34 +380,89 @@ impl<'scope> Background<'scope> {
         Ok(())
     }
 
-    /// Hands a step to the writer, waiting while the previous one is still queued; the
-    /// writer's error if it has stopped on one (after which the run stops: nothing more is
-    /// sent, and [`Self::finish`] joins nothing).
+    /// Hands a step to the writer, waiting while the queue is full; the writer's error if it
+    /// has stopped on one (after which the run stops: nothing more is sent, and
+    /// [`Self::finish`] joins nothing).
     pub fn send(&mut self, step: StepOutput) -> Result<(), RunError> {
         self.check()?;
         let t = Instant::now();
-        let sent = self.tx.send(step);
+        let mut q = self.shared.lock();
+        while !q.stopped && q.waiting_steps() >= BATCH {
+            q = self.shared.wait(q);
+        }
+        let stopped = q.stopped;
+        if !stopped {
+            q.items.push_back(Item::Step(step));
+            self.shared.changed.notify_all();
+        }
+        drop(q);
         self.wait += t.elapsed().as_secs_f64();
-        match sent {
-            Ok(()) => Ok(()),
-            // The receiver is gone: the writer stopped on an error.
-            Err(_) => Err(self.stopped_error()),
+        if stopped {
+            return Err(self.stopped_error());
+        }
+        Ok(())
+    }
+
+    /// No more steps will come: prepares the steps still waiting in the queue on this
+    /// thread, from the last (the writer takes them from the first), and hands them back to
+    /// the writer, which puts them in place in their turn. A step whose field it asked for
+    /// (the last) has it once this returns, whichever thread prepared it.
+    pub fn help(&mut self) {
+        if self.handle.is_none() {
+            return;
+        }
+        let shared = &self.shared;
+        shared.lock().closed = true;
+        shared.changed.notify_all();
+        loop {
+            // The steps waiting at the back of the queue, up to a batch.
+            let (id, steps) = {
+                let mut q = shared.lock();
+                let from = q
+                    .items
+                    .iter()
+                    .rposition(|i| !matches!(i, Item::Step(_)))
+                    .map_or(0, |k| k + 1)
+                    .max(q.items.len().saturating_sub(BATCH));
+                if q.stopped || from == q.items.len() {
+                    return;
+                }
+                let id = q.next_id;
+                q.next_id += 1;
+                let steps: Vec<StepOutput> = q
+                    .items
+                    .drain(from..)
+                    .map(|i| match i {
+                        Item::Step(s) => s,
+                        Item::Taken(_) => unreachable!("only steps after the last taken"),
+                    })
+                    .collect();
+                q.items.push_back(Item::Taken(id));
+                (id, steps)
+            };
+            let prepared = self.bodies.prepare(steps, false);
+            let mut q = shared.lock();
+            if q.stopped {
+                prepared.discard();
+                return;
+            }
+            q.done.insert(id, prepared);
+            shared.changed.notify_all();
         }
     }
 
-    /// Waits for the writer to write every step handed to it: (its busy seconds, the seconds
-    /// the caller spent waiting for it), or its error (`Ok` with no busy time if the error was
-    /// already returned by [`Self::check`] or [`Self::send`]).
-    pub fn finish(self) -> Result<(f64, f64), RunError> {
-        let Background { tx, handle, wait } = self;
-        // No more steps: the writer ends once it has written those queued.
-        drop(tx);
-        let Some(h) = handle else {
-            return Ok((0.0, wait));
+    /// Waits for the writer to put every step in place (after [`Self::help`]): (its busy
+    /// seconds with this thread's preparations, the seconds the caller spent waiting for it),
+    /// or its error (`Ok` with no busy time if the error was already returned by
+    /// [`Self::check`] or [`Self::send`]).
+    pub fn finish(mut self) -> Result<(f64, f64), RunError> {
+        self.help();
+        let Some(h) = self.handle.take() else {
+            return Ok((0.0, self.wait));
         };
         let t = Instant::now();
         let busy = join(h)?;
-        Ok((busy, wait + t.elapsed().as_secs_f64()))
+        Ok((busy, self.wait + t.elapsed().as_secs_f64()))
     }
 
     /// Joins the writer thread, which has stopped early: its error.
@@ -319,6 +475,54 @@ impl<'scope> Background<'scope> {
             Err(e) => e,
             Ok(_) => unreachable!("the writer stops before it is finished only on an error"),
         }
+    }
+}
+
+/// The writer thread's work: the queue's items in order until it is closed and empty.
+fn writer_loop(shared: &Shared, series: &mut Series<'_>) -> Result<(), RunError> {
+    loop {
+        let mut q = shared.lock();
+        let prepared = loop {
+            match q.items.front() {
+                None if q.closed => return Ok(()),
+                None => q = shared.wait(q),
+                Some(Item::Taken(id)) => {
+                    let id = *id;
+                    match q.done.remove(&id) {
+                        Some(p) => {
+                            q.items.pop_front();
+                            break Some(p);
+                        }
+                        None => q = shared.wait(q),
+                    }
+                }
+                Some(Item::Step(_)) => break None,
+            }
+        };
+        let prepared = match prepared {
+            Some(p) => {
+                drop(q);
+                p
+            }
+            None => {
+                // The steps waiting at the front, together.
+                let mut batch = Vec::new();
+                while batch.len() < BATCH {
+                    match q.items.front() {
+                        Some(Item::Step(_)) => match q.items.pop_front() {
+                            Some(Item::Step(s)) => batch.push(s),
+                            _ => unreachable!("the front is a step"),
+                        },
+                        _ => break,
+                    }
+                }
+                shared.changed.notify_all();
+                drop(q);
+                let spread = batch.iter().any(|s| s.reply.is_some());
+                series.bodies.prepare(batch, spread)
+            }
+        };
+        series.commit(prepared)?;
     }
 }
 
