@@ -137,40 +137,23 @@ pub fn check(
             });
         }
     }
-    // Element geometry.
+    // Element geometry, body by body: the elements on rayon's threads, the first bad one (in
+    // the group's order) reported; then the nodes each body owns.
     let mut owner: Vec<u32> = vec![u32::MAX; mesh.nodes.len()];
     for (bi, b) in bodies.iter().enumerate() {
         let g = mesh.group(b).expect("checked above");
+        {
+            use rayon::prelude::*;
+            if let Some(Err(e)) = g
+                .elements
+                .par_iter()
+                .map(|&e| element_geometry(mesh, e))
+                .find_first(Result::is_err)
+            {
+                return Err(e);
+            }
+        }
         for &e in &g.elements {
-            let xe = mesh.tri_coords(e);
-            let tag = mesh.triangles[e].tag;
-            let scale = (0..3)
-                .map(|k| {
-                    let [a, c] = [xe[k], xe[(k + 1) % 3]];
-                    (a[0] - c[0]).hypot(a[1] - c[1])
-                })
-                .fold(0.0, f64::max);
-            let area = tri6::vertex_area(&xe);
-            if area.is_nan() || area <= 1e-12 * scale * scale {
-                return Err(MeshCheckError::Degenerate {
-                    path: path(mesh),
-                    tag,
-                });
-            }
-            let pts = TRI_6
-                .iter()
-                .map(|(p, _)| *p)
-                .chain(tri6::NODE_REF_COORDS.iter().copied());
-            let min_det = pts
-                .map(|p| tri6::map_point(&xe, p[0], p[1]).det_j)
-                .fold(f64::INFINITY, f64::min);
-            if min_det.is_nan() || min_det <= 0.0 {
-                return Err(MeshCheckError::BadJacobian {
-                    path: path(mesh),
-                    tag,
-                    min_det,
-                });
-            }
             for &n in &mesh.triangles[e].nodes {
                 let o = owner[n];
                 if o != u32::MAX && o as usize != bi {
@@ -204,6 +187,41 @@ pub fn check(
     Ok(CheckReport {
         reoriented: mesh.reoriented.clone(),
     })
+}
+
+/// An element's geometry: not degenerate (its vertex area above round-off of its size) and
+/// a positive Jacobian at the quadrature points and the nodes.
+fn element_geometry(mesh: &Mesh, e: usize) -> Result<(), MeshCheckError> {
+    let xe = mesh.tri_coords(e);
+    let tag = mesh.triangles[e].tag;
+    let scale = (0..3)
+        .map(|k| {
+            let [a, c] = [xe[k], xe[(k + 1) % 3]];
+            (a[0] - c[0]).hypot(a[1] - c[1])
+        })
+        .fold(0.0, f64::max);
+    let area = tri6::vertex_area(&xe);
+    if area.is_nan() || area <= 1e-12 * scale * scale {
+        return Err(MeshCheckError::Degenerate {
+            path: path(mesh),
+            tag,
+        });
+    }
+    let pts = TRI_6
+        .iter()
+        .map(|(p, _)| *p)
+        .chain(tri6::NODE_REF_COORDS.iter().copied());
+    let min_det = pts
+        .map(|p| tri6::map_point(&xe, p[0], p[1]).det_j)
+        .fold(f64::INFINITY, f64::min);
+    if min_det.is_nan() || min_det <= 0.0 {
+        return Err(MeshCheckError::BadJacobian {
+            path: path(mesh),
+            tag,
+            min_det,
+        });
+    }
+    Ok(())
 }
 
 fn shared_nodes(mesh: &Mesh, a: &str, b: &str) -> Vec<usize> {

@@ -474,16 +474,18 @@ impl Model {
     /// (32 bytes) looked up in a table the size of the mesh, which was a tenth of the work of
     /// the output writer and the summary on L5.
     pub fn element_u(&self, i: usize, u: &[f64]) -> [f64; 12] {
+        // Built on the calling thread: a rayon task waiting for this initialisation (the
+        // writer's and the driver's threads both compute stresses at the end of a run) must
+        // not be the one that would have to run part of it.
         let table = self.elem_dofs.get_or_init(|| {
             use crate::dofs::Dof;
-            use rayon::prelude::*;
             let n_free = self.dofs.n_free();
             assert!(
                 n_free + self.dofs.prescribed.len() < u32::MAX as usize,
                 "DOF indices fit 32 bits"
             );
             self.elems
-                .par_iter()
+                .iter()
                 .map(|(e, _)| {
                     let nodes = &self.mesh.triangles[*e].nodes;
                     std::array::from_fn(|k| match self.dofs.node[nodes[k / 2]][k % 2] {
@@ -505,18 +507,19 @@ impl Model {
         })
     }
 
-    /// Nodal stresses (σxx, σyy, σxy, σzz), averaged over the elements around each node.
-    pub fn nodal_stresses(&self, u: &[f64]) -> Vec<[f64; 4]> {
+    /// Nodal stresses (σxx, σyy, σxy, σzz), averaged over the elements around each node; the
+    /// elements on rayon's threads with `parallel`, else on the calling thread (the same bits).
+    pub fn nodal_stresses(&self, u: &[f64], parallel: bool) -> Vec<[f64; 4]> {
         use rayon::prelude::*;
-        let per_elem: Vec<[[f64; 4]; 6]> = self
-            .elems
-            .par_iter()
-            .enumerate()
-            .map(|(i, (e, mat))| {
-                let ue: [f64; 12] = self.element_u(i, u);
-                elasticity::nodal_stress(&self.mesh.tri_coords(*e), &ue, mat)
-            })
-            .collect();
+        let one = |(i, (e, mat)): (usize, &(usize, Material))| {
+            let ue: [f64; 12] = self.element_u(i, u);
+            elasticity::nodal_stress(&self.mesh.tri_coords(*e), &ue, mat)
+        };
+        let per_elem: Vec<[[f64; 4]; 6]> = if parallel {
+            self.elems.par_iter().enumerate().map(one).collect()
+        } else {
+            self.elems.iter().enumerate().map(one).collect()
+        };
         let mut acc = vec![[0.0; 4]; self.mesh.nodes.len()];
         let mut count = vec![0u32; self.mesh.nodes.len()];
         for ((e, _), s) in self.elems.iter().zip(&per_elem) {

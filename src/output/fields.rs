@@ -157,9 +157,10 @@ impl BodiesMesh {
     }
 }
 
-/// The point fields of the bodies dataset at one step: displacement, stresses, von Mises.
-pub fn bodies_fields(model: &Model, u: &[f64]) -> Vec<vtu::Field> {
-    let stress = model.nodal_stresses(u);
+/// The point fields of the bodies dataset at one step: displacement, stresses, von Mises
+/// (`parallel`: the stresses on rayon's threads, else on the calling thread).
+pub fn bodies_fields(model: &Model, u: &[f64], parallel: bool) -> Vec<vtu::Field> {
+    let stress = model.nodal_stresses(u, parallel);
     let n = model.active.iter().filter(|&&a| a).count();
     let mut disp = Vec::with_capacity(n * 3);
     let (mut sxx, mut syy, mut sxy, mut szz, mut vm) = (

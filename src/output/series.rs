@@ -60,8 +60,11 @@ pub struct StepOutput {
     pub reply: Option<SyncSender<Vec<f64>>>,
 }
 
-/// Steps the writer takes at once at most, and the steps that may wait in its queue.
+/// Steps the writer (or the driver's thread, at the end) prepares at once at most.
 pub const BATCH: usize = 2;
+
+/// Steps that may wait in the writer's queue before the driver waits for it.
+pub const QUEUE: usize = 8;
 
 /// What writing a step's bodies dataset needs, shared by the writer thread and the driver's
 /// thread (which prepares the last steps itself once it has no more to solve).
@@ -133,22 +136,34 @@ impl Bodies<'_> {
             }
         }
         crate::trace::mark("fields recovered");
-        let point_data: Vec<Vec<Field>> =
-            fields.par_iter().map(|u| bodies_fields(model, u)).collect();
+        // Without `spread` on this thread alone: the contact solve (or the other thread's
+        // preparation) has the other core.
+        let point_data: Vec<Vec<Field>> = if spread {
+            fields
+                .par_iter()
+                .map(|u| bodies_fields(model, u, true))
+                .collect()
+        } else {
+            fields
+                .iter()
+                .map(|u| bodies_fields(model, u, false))
+                .collect()
+        };
         crate::trace::mark("point fields");
         let mesh = self.mesh.get_or_init(|| BodiesMesh::new(model));
         let (dir, stem, compress) = (self.dir, self.stem, self.compress);
-        let bodies = steps
-            .par_iter()
-            .zip(&point_data)
-            .map(|(s, data)| {
-                let name = format!("{stem}_{:04}.vtu", s.step);
-                let path = dir.join(&name);
-                let tmp = super::write_temporary(&path, &bodies_vtu(mesh, data, compress).parts())
-                    .map_err(|source| write_error(&path, source))?;
-                Ok((tmp, name))
-            })
-            .collect();
+        let write = |(s, data): (&StepOutput, &Vec<Field>)| {
+            let name = format!("{stem}_{:04}.vtu", s.step);
+            let path = dir.join(&name);
+            let tmp = super::write_temporary(&path, &bodies_vtu(mesh, data, compress).parts())
+                .map_err(|source| write_error(&path, source))?;
+            Ok((tmp, name))
+        };
+        let bodies = if spread {
+            steps.par_iter().zip(&point_data).map(write).collect()
+        } else {
+            steps.iter().zip(&point_data).map(write).collect()
+        };
         crate::trace::mark("bodies files prepared");
         Prepared {
             steps,
@@ -263,7 +278,10 @@ impl<'a> Series<'a> {
                 contact_csv(model, st).as_bytes(),
             )?;
         }
-        write_file(&dir.join(format!("{stem}.pvd")), pvd(&self.entries).as_bytes())?;
+        write_file(
+            &dir.join(format!("{stem}.pvd")),
+            pvd(&self.entries).as_bytes(),
+        )?;
         // The state to resume from, after the step's files.
         if let Some(mut saved) = s.state {
             saved.pvd = self.entries.clone();
@@ -387,7 +405,7 @@ impl<'scope, 'env> Background<'scope, 'env> {
         self.check()?;
         let t = Instant::now();
         let mut q = self.shared.lock();
-        while !q.stopped && q.waiting_steps() >= BATCH {
+        while !q.stopped && q.waiting_steps() >= QUEUE {
             q = self.shared.wait(q);
         }
         let stopped = q.stopped;

@@ -221,6 +221,41 @@ impl Block {
     }
 }
 
+/// Block unknowns from which the columns of `G` skip the zero rows of the forward sweep
+/// ([`Block::solve_unit_columns`]). Below, the columns cost little (5 ms in all on Fig. 2 at
+/// L5), and the rounding of the whole solve is kept: on L4 the slip-controlled start of
+/// `cases/fig2_softening.json`, which crosses the ramp's kink, took five cutbacks instead of
+/// none with columns that differed from it by round-off (1e-12 relative) — a step that close
+/// to cycling is decided by the last bits.
+const TRAILING_FROM: usize = 1024;
+
+impl Block {
+    /// [`Self::solve_in_place`] for right-hand sides that are zero above row `q0` (columns of
+    /// the identity): the forward sweep `L y = b` leaves those rows zero, so it runs on the
+    /// trailing block `L[q0.., q0..]` alone. The columns of `G` are those of slip rows, which
+    /// (ordered by initial gap, or tangential after normal) sit late in the block: on Fig. 2 at
+    /// L7 this takes most of the forward half of their cost.
+    fn solve_unit_columns(&self, b: &mut Mat<f64>, q0: usize) {
+        use faer::linalg::triangular_solve as tri;
+        let par = faer::Par::Seq;
+        let l = self.l();
+        let n = l.nrows();
+        let q0 = q0.min(n);
+        tri::solve_lower_triangular_in_place_with_conj(
+            l.submatrix(q0, q0, n - q0, n - q0),
+            faer::Conj::No,
+            b.as_mut().subrows_mut(q0, n - q0),
+            par,
+        );
+        tri::solve_upper_triangular_in_place_with_conj(
+            l.transpose(),
+            faer::Conj::Yes,
+            b.as_mut(),
+            par,
+        );
+    }
+}
+
 /// Whether the pivots `L_ii²` of a Cholesky factor are usable: as for an LU, singular when the
 /// smallest is below 1e-12 of the largest; and pivots within 2^52 of the smallest normal number
 /// have lost digits to underflow (absurd moduli make W that small).
@@ -611,7 +646,11 @@ impl LuCache {
         for (c, &q) in qs.iter().enumerate() {
             e[(q, c)] = 1.0;
         }
-        block.solve_in_place(&mut e);
+        if nk >= TRAILING_FROM {
+            block.solve_unit_columns(&mut e, qs.iter().copied().min().unwrap_or(nk));
+        } else {
+            block.solve_in_place(&mut e);
+        }
         for (c, &q) in qs.iter().enumerate() {
             self.k_cols[q] = e.col(c).iter().copied().collect();
         }
