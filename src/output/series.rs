@@ -299,7 +299,7 @@ impl<'a> Series<'a> {
 /// An entry of the writer's queue: a step to write, or steps that the driver's thread took
 /// from the queue to prepare (the writer puts them in place in their turn).
 enum Item {
-    Step(StepOutput),
+    Step(Box<StepOutput>),
     Taken(u64),
 }
 
@@ -410,7 +410,7 @@ impl<'scope, 'env> Background<'scope, 'env> {
         }
         let stopped = q.stopped;
         if !stopped {
-            q.items.push_back(Item::Step(step));
+            q.items.push_back(Item::Step(Box::new(step)));
             self.shared.changed.notify_all();
         }
         drop(q);
@@ -451,7 +451,7 @@ impl<'scope, 'env> Background<'scope, 'env> {
                     .items
                     .drain(from..)
                     .map(|i| match i {
-                        Item::Step(s) => s,
+                        Item::Step(s) => *s,
                         Item::Taken(_) => unreachable!("only steps after the last taken"),
                     })
                     .collect();
@@ -528,7 +528,7 @@ fn writer_loop(shared: &Shared, series: &mut Series<'_>) -> Result<(), RunError>
                 while batch.len() < BATCH {
                     match q.items.front() {
                         Some(Item::Step(_)) => match q.items.pop_front() {
-                            Some(Item::Step(s)) => batch.push(s),
+                            Some(Item::Step(s)) => batch.push(*s),
                             _ => unreachable!("the front is a step"),
                         },
                         _ => break,
