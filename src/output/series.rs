@@ -433,29 +433,39 @@ impl<'scope, 'env> Background<'scope, 'env> {
         shared.lock().closed = true;
         shared.changed.notify_all();
         loop {
-            // The steps waiting at the back of the queue, up to a batch.
+            // The last run of steps waiting in the queue (those after it, if any, are taken
+            // already): the later half of it, up to a batch, in place of which goes a
+            // marker. The writer, busy with the steps before them, takes the earlier half.
             let (id, steps) = {
                 let mut q = shared.lock();
-                let from = q
+                let Some(end) = q
                     .items
                     .iter()
+                    .rposition(|i| matches!(i, Item::Step(_)))
+                    .map(|k| k + 1)
+                else {
+                    return;
+                };
+                let start = q
+                    .items
+                    .range(..end)
                     .rposition(|i| !matches!(i, Item::Step(_)))
-                    .map_or(0, |k| k + 1)
-                    .max(q.items.len().saturating_sub(BATCH));
-                if q.stopped || from == q.items.len() {
+                    .map_or(0, |k| k + 1);
+                let take = (end - start).div_ceil(2).min(BATCH);
+                if q.stopped {
                     return;
                 }
                 let id = q.next_id;
                 q.next_id += 1;
                 let steps: Vec<StepOutput> = q
                     .items
-                    .drain(from..)
+                    .drain(end - take..end)
                     .map(|i| match i {
                         Item::Step(s) => *s,
-                        Item::Taken(_) => unreachable!("only steps after the last taken"),
+                        Item::Taken(_) => unreachable!("a run of steps"),
                     })
                     .collect();
-                q.items.push_back(Item::Taken(id));
+                q.items.insert(end - take, Item::Taken(id));
                 (id, steps)
             };
             let prepared = self.bodies.prepare(steps, false);
