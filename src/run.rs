@@ -253,7 +253,7 @@ pub fn run_model(
         }
         // The steps still waiting for the writer: this thread prepares them from the last
         // while the writer finishes those it has; then the summary and its checks.
-        writer.help();
+        let _ = writer.help();
         let mut sim = sim;
         if let Some((step, rx)) = last_u
             && sim.last_u.is_none()

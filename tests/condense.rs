@@ -243,3 +243,114 @@ fn a_batch_of_steps_writes_what_one_step_at_a_time_writes() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The background writer with the driver's thread helping at the end (`Background::help`:
+/// the later half of the waiting steps prepared on the calling thread, put in place by the
+/// writer in their turn) writes the same files, byte for byte, as `Series::write` one step at
+/// a time; the last step's field reaches the driver whichever thread recovered it. A step the
+/// writer cannot put in place stops it there: it is reported, and no file of a later step
+/// (prepared by either thread) stays behind, temporary or not.
+#[test]
+fn the_writer_with_the_driver_helping_writes_what_one_step_at_a_time_writes() {
+    use stickslip::output::series::{Background, Series, StepOutput};
+    let mut steps = Vec::new();
+    let (model, _) = cm_on_l1(&mut |ev| {
+        steps.push((ev.step, ev.time, ev.scale, ev.contact.cloned().unwrap()));
+        Ok(())
+    });
+    assert!(steps.len() >= 6, "{} steps", steps.len());
+    let out = |s: &(usize, f64, f64, stickslip::contact::solver::State),
+               reply: Option<std::sync::mpsc::SyncSender<Vec<f64>>>| StepOutput {
+        step: s.0,
+        time: s.1,
+        scale: s.2,
+        u: None,
+        contact: Some(s.3.clone()),
+        state: None,
+        reply,
+    };
+    let dir = tempdir("writer-helped");
+    let (one, helped, failed) = (dir.join("one"), dir.join("helped"), dir.join("failed"));
+    for d in [&one, &helped, &failed] {
+        std::fs::create_dir_all(d).unwrap();
+    }
+    let mut series = Series::new(&model, &one, "cm", false);
+    for s in &steps {
+        series.write(vec![out(s, None)]).unwrap();
+    }
+    // All the steps queued before the writer can take more than the first: the driver's
+    // thread then prepares the later half of those waiting.
+    let last = steps.last().unwrap();
+    // The steps are handed over in microseconds and the writer's first takes a millisecond
+    // or more, so the driver's thread finds steps waiting; tried again (into a clean
+    // directory) the rare time it does not.
+    let mut replied = None;
+    for _ in 0..5 {
+        let _ = std::fs::remove_dir_all(&helped);
+        std::fs::create_dir_all(&helped).unwrap();
+        let (tx, rx) = std::sync::mpsc::sync_channel(1);
+        let by_driver = std::thread::scope(|scope| {
+            let mut writer = Background::spawn(scope, Series::new(&model, &helped, "cm", false));
+            for s in &steps[..steps.len() - 1] {
+                writer.send(out(s, None)).unwrap();
+            }
+            writer.send(out(last, Some(tx))).unwrap();
+            let by_driver = writer.help();
+            let (busy, _) = writer.finish().unwrap();
+            assert!(busy > 0.0);
+            by_driver
+        });
+        replied = Some(rx.recv().expect("the last step's field is sent back"));
+        if by_driver > 0 {
+            break;
+        }
+        replied = None;
+    }
+    let replied = replied.expect("the driver's thread prepared no step in five tries");
+    let own = model.contact_displacement(last.2, &last.3);
+    assert!(
+        replied
+            .iter()
+            .zip(&own)
+            .all(|(a, b)| a.to_bits() == b.to_bits())
+    );
+    let names = file_names(&one);
+    assert_eq!(names.len(), 3 * steps.len() + 1, "{names:?}");
+    assert_eq!(file_names(&helped), names);
+    for name in &names {
+        assert!(
+            std::fs::read(one.join(name)).unwrap() == std::fs::read(helped.join(name)).unwrap(),
+            "{name} differs between one-step and helped writes"
+        );
+    }
+    // A step in the middle that cannot be put in place (a directory where its bodies file
+    // goes): the error names it, the steps before it are whole, nothing of the later ones.
+    let bad = steps[steps.len() / 2].0;
+    let bad_name = format!("cm_{bad:04}.vtu");
+    std::fs::create_dir_all(failed.join(&bad_name)).unwrap();
+    let err = std::thread::scope(|scope| {
+        let mut writer = Background::spawn(scope, Series::new(&model, &failed, "cm", false));
+        for s in &steps {
+            if writer.send(out(s, None)).is_err() {
+                break;
+            }
+        }
+        let _ = writer.help();
+        writer.finish().unwrap_err()
+    });
+    assert!(err.to_string().contains(&bad_name), "{err}");
+    for name in file_names(&failed) {
+        assert!(
+            !name.starts_with('.'),
+            "a temporary file stayed behind: {name}"
+        );
+        if let Some(k) = name
+            .strip_prefix("cm_")
+            .and_then(|n| n.strip_suffix(".vtu"))
+            .and_then(|n| n.parse::<usize>().ok())
+        {
+            assert!(k <= bad, "{name} was written after the failed step {bad}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -424,10 +424,12 @@ impl<'scope, 'env> Background<'scope, 'env> {
     /// No more steps will come: prepares the steps still waiting in the queue on this
     /// thread, from the last (the writer takes them from the first), and hands them back to
     /// the writer, which puts them in place in their turn. A step whose field it asked for
-    /// (the last) has it once this returns, whichever thread prepared it.
-    pub fn help(&mut self) {
+    /// (the last) has it once this returns, whichever thread prepared it. Returns the number
+    /// of steps this thread prepared.
+    pub fn help(&mut self) -> usize {
+        let mut prepared_here = 0;
         if self.handle.is_none() {
-            return;
+            return prepared_here;
         }
         let shared = &self.shared;
         shared.lock().closed = true;
@@ -444,7 +446,7 @@ impl<'scope, 'env> Background<'scope, 'env> {
                     .rposition(|i| matches!(i, Item::Step(_)))
                     .map(|k| k + 1)
                 else {
-                    return;
+                    return prepared_here;
                 };
                 let start = q
                     .items
@@ -453,7 +455,7 @@ impl<'scope, 'env> Background<'scope, 'env> {
                     .map_or(0, |k| k + 1);
                 let take = (end - start).div_ceil(2).min(BATCH);
                 if q.stopped {
-                    return;
+                    return prepared_here;
                 }
                 let id = q.next_id;
                 q.next_id += 1;
@@ -468,11 +470,12 @@ impl<'scope, 'env> Background<'scope, 'env> {
                 q.items.insert(end - take, Item::Taken(id));
                 (id, steps)
             };
+            prepared_here += steps.len();
             let prepared = self.bodies.prepare(steps, false);
             let mut q = shared.lock();
             if q.stopped {
                 prepared.discard();
-                return;
+                return prepared_here;
             }
             q.done.insert(id, prepared);
             shared.changed.notify_all();
@@ -484,7 +487,7 @@ impl<'scope, 'env> Background<'scope, 'env> {
     /// or its error (`Ok` with no busy time if the error was already returned by
     /// [`Self::check`] or [`Self::send`]).
     pub fn finish(mut self) -> Result<(f64, f64), RunError> {
-        self.help();
+        let _ = self.help();
         let Some(h) = self.handle.take() else {
             return Ok((0.0, self.wait));
         };
