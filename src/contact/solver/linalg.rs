@@ -89,7 +89,19 @@ pub struct LuCache {
     /// has one (see [`Self::recall_w_mu`]).
     products: Vec<(Vec<f64>, Vec<f64>)>,
     prediction: Option<f64>,
+    /// With the shortcuts: the special rows (positions in `K`) and the LU of the last
+    /// capacitance system factorised, which preconditions GMRES on the next system with the
+    /// same rows (see [`CAPACITANCE_REUSE_FROM`]).
+    cap_lu: Option<(Vec<usize>, faer::linalg::solvers::PartialPivLu<f64>)>,
 }
+
+/// Special rows from which, with the shortcuts, a capacitance system whose rows are those
+/// of the last one factorised is solved by GMRES preconditioned with that LU instead of
+/// factorised again. Within a load step the slip rows stay and only their coefficients move
+/// with the linearisation of μ(slip), so the LU of the step's first iteration serves the
+/// others; Fig. 2 on L7 ends with some 700 slip rows, whose LU (6 ms) each Newton iteration
+/// had repeated. Below, the LU costs little and the rounding of the direct solve is kept.
+const CAPACITANCE_REUSE_FROM: usize = 256;
 
 /// Seconds spent in the parts of the structured contact solve, summed over a run.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
@@ -428,6 +440,7 @@ impl LuCache {
 
     /// Forgets the factorised block `K` and everything computed from it.
     fn forget_block(&mut self) {
+        self.cap_lu = None;
         self.k_llt = None;
         self.k_unk.clear();
         self.k_pos.clear();
@@ -446,6 +459,7 @@ impl LuCache {
     /// LU, the last direct solve and the products kept for the next steps) and returns what it can (see [`BlockRecord`]).
     pub fn checkpoint(&mut self) -> Option<BlockRecord> {
         self.lu = None;
+        self.cap_lu = None;
         self.unk.clear();
         self.forget_direct();
         self.products.clear();
@@ -661,19 +675,38 @@ impl LuCache {
     /// The Woodbury step from `x = x0 = K⁻¹ b`: solves `C y = B x0` and sets `x = x0 − G y`;
     /// returns `y`, or `None` if `C` is near-singular.
     fn woodbury_correction(
-        &self,
+        &mut self,
         special: &[SpecialRow],
         b: &[f64],
         x: &mut [f64],
     ) -> Option<Vec<f64>> {
         let p = special.len();
         let (cap, rhs) = self.capacitance_system(special, b, x);
-        let clu = cap.partial_piv_lu();
-        // Near-singular (gross sliding, a free direction): the dense system decides.
-        if (0..p).any(|i| clu.U()[(i, i)].abs() <= 1e-10) {
-            return None;
-        }
-        let y = clu.solve(&rhs);
+        let reuse = !self.exact && p >= CAPACITANCE_REUSE_FROM;
+        let rows: Vec<usize> = special.iter().map(|s| s.row).collect();
+        let iterated = match &self.cap_lu {
+            Some((r, lu)) if reuse && *r == rows => {
+                gmres(&cap, &rhs, lu, 1e-13, GMRES_MAX).map(|(y, its)| {
+                    self.gmres_iterations += its;
+                    y
+                })
+            }
+            _ => None,
+        };
+        let y = match iterated {
+            Some(y) => y,
+            None => {
+                let clu = cap.partial_piv_lu();
+                // Near-singular (gross sliding, a free direction): the dense system decides.
+                if (0..p).any(|i| clu.U()[(i, i)].abs() <= 1e-10) {
+                    self.cap_lu = None;
+                    return None;
+                }
+                let y = clu.solve(&rhs);
+                self.cap_lu = reuse.then_some((rows, clu));
+                y
+            }
+        };
         let y_cap: Vec<f64> = (0..p).map(|j| y[(j, 0)]).collect();
         for (sj, yj) in special.iter().zip(&y_cap) {
             axpy(x, -yj, &self.k_cols[sj.row]);
