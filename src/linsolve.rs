@@ -1006,6 +1006,7 @@ impl SaddleFactor {
                 }
             }
         }
+        crate::trace::mark("delassus: L_MM gathered");
         let dmax = (0..m).map(|i| l[(i, i)].abs()).fold(0.0, f64::max);
         if (0..m).any(|i| l[(i, i)].partial_cmp(&(-1e-13 * dmax)) != Some(std::cmp::Ordering::Less))
         {
@@ -1022,6 +1023,7 @@ impl SaddleFactor {
                 l[(i, j)] = v * d;
             }
         }
+        crate::trace::mark("delassus: L D");
         let mut w = faer::Mat::<f64>::zeros(m, m);
         matmul(
             w.as_mut(),
@@ -1034,6 +1036,7 @@ impl SaddleFactor {
             -1.0,
             factor_parallelism(),
         );
+        crate::trace::mark("delassus: product");
         // The upper half from the lower, in tiles (so that the transposed writes stay in
         // cache: 130 MB at L7).
         const TILE: usize = 64;
@@ -1046,6 +1049,7 @@ impl SaddleFactor {
                 }
             }
         }
+        crate::trace::mark("delassus: symmetric");
         if !keep_factor {
             return Some((w, None));
         }

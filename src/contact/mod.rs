@@ -100,8 +100,10 @@ impl ContactModel {
         }
         .map(|(w, c)| match (c, order) {
             (Some(c), Some(order)) => {
+                crate::trace::mark("delassus: C");
                 let (mut w, pf) = (w, solver::PrefixFactor::new(c, order));
                 to_mu_order(&mut w, &pf.pos);
+                crate::trace::mark("delassus: in μ order");
                 (w, Some(pf))
             }
             (_, _) => (w, None),
