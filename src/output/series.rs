@@ -471,7 +471,18 @@ impl<'scope, 'env> Background<'scope, 'env> {
                 (id, steps)
             };
             prepared_here += steps.len();
-            let prepared = self.bodies.prepare(steps, false);
+            let bodies = &self.bodies;
+            let prepared = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                bodies.prepare(steps, false)
+            })) {
+                Ok(p) => p,
+                Err(panic) => {
+                    // The writer would wait for these steps for ever: it stops first.
+                    shared.lock().stopped = true;
+                    shared.changed.notify_all();
+                    std::panic::resume_unwind(panic)
+                }
+            };
             let mut q = shared.lock();
             if q.stopped {
                 prepared.discard();
@@ -524,6 +535,8 @@ fn writer_loop(shared: &Shared, series: &mut Series<'_>) -> Result<(), RunError>
                             q.items.pop_front();
                             break Some(p);
                         }
+                        // The driver's thread gave up on them (it panicked): nothing more.
+                        None if q.stopped => return Ok(()),
                         None => q = shared.wait(q),
                     }
                 }
