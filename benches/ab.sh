@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # A/B timing of two stickslip binaries (or one binary under two environments) on one case, in
 # alternating runs so that the machine's drift falls on both alike; prints the median and the
-# minimum process wall time of each and the median of the per-pair ratios B/A.
+# minimum process wall time of each and the median of the per-pair ratios B/A, then each side's
+# wall time against its own floor (`timings_s.build_span` of the run's summary.json: the
+# assembly, analysis and factorisation as they ran) and what the run spent beyond it.
 #
 #   benches/ab.sh N BIN_A BIN_B [CASE] [cold|warm] [ENV_A] [ENV_B]
 #
@@ -36,14 +38,26 @@ run() { # side bin env
   t0=$(date +%s%N)
   env $3 "$2" run "$CASE" --out "$work/out_$1" --quiet --threads "${STICKSLIP_THREADS:-2}" $(args "$1") >/dev/null
   t1=$(date +%s%N)
-  echo "$(( (t1 - t0) / 1000 ))e-6"
+  # The wall time, and the run's floor (`timings_s.build_span` of its summary; 0 if none).
+  local floor
+  floor=$(python3 -c 'import json,sys
+try: print(json.load(open(sys.argv[1]))["timings_s"]["build_span"])
+except Exception: print(0)' "$work/out_$1/summary.json")
+  echo "$(( (t1 - t0) / 1000 ))e-6,$floor"
 }
 if [ "$MODE" = warm ]; then run A "$A" "$EA" >/dev/null; run B "$B" "$EB" >/dev/null; fi
 for _ in $(seq "$N"); do
   echo "$(run A "$A" "$EA") $(run B "$B" "$EB")"
 done | python3 -c '
 import statistics as st, sys
-r = [tuple(map(float, l.split())) for l in sys.stdin]
-a = [x for x, _ in r]; b = [y for _, y in r]
+r = [tuple(tuple(map(float, s.split(","))) for s in l.split()) for l in sys.stdin]
+a = [x[0] for x, _ in r]; b = [y[0] for _, y in r]
 print("A: median %.3f s, min %.3f s | B: median %.3f s, min %.3f s | B/A: median of %d pairs %.3f"
-      % (st.median(a), min(a), st.median(b), min(b), len(r), st.median([y / x for x, y in r])))'
+      % (st.median(a), min(a), st.median(b), min(b), len(r), st.median([y[0] / x[0] for x, y in r])))
+# Each run against its own floor (the assembly, analysis and factorisation as they ran).
+if all(x[1] > 0 and y[1] > 0 for x, y in r):
+    for side, k in (("A", 0), ("B", 1)):
+        v = [p[k] for p in r]
+        print("%s: wall / floor median %.3f (%s), wall - floor median %.3f s"
+              % (side, st.median([w / f for w, f in v]), " ".join("%.2f" % (w / f) for w, f in v),
+                 st.median([w - f for w, f in v])))'
