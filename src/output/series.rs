@@ -3,13 +3,15 @@
 //! a run stopped at any point leaves a series ParaView opens; then the step's restart state.
 //!
 //! The steps are written by a background thread ([`Background`]) while the driver solves the
-//! next ones: it takes the steps in order from a channel of depth [`BATCH`] and writes exactly
+//! next ones: it takes the steps in order from a queue of [`QUEUE`] steps and writes exactly
 //! the files, in exactly the order, that writing in the loop would, so a run's files do not
-//! depend on it. When it falls behind it takes the queued steps together: their displacement
-//! fields come from one block solve (which reads the factor once for all, and gives each field
-//! bit for bit), and their point fields (stresses) are computed in parallel; each array goes to
-//! the file from its own memory. Its first error stops it;
-//! the driver sees that error at its next step, and stops.
+//! depend on it. When it falls behind it takes the queued steps together (up to [`BATCH`]):
+//! their displacement fields come from one block solve (which reads the factor once for all,
+//! and gives each field bit for bit). Once the driver has solved its last step it prepares the
+//! later half of the steps still waiting on its own thread ([`Background::help`]) and hands
+//! them back, and the writer puts them in place in their turn. Each array goes to the file
+//! from its own memory. Its first error stops it; the driver sees that error at its next step,
+//! and stops.
 
 use super::fields::{BodiesMesh, bodies_fields, bodies_vtu, contact_csv, contact_vtu};
 use super::vtu::Field;
