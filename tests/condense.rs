@@ -178,24 +178,25 @@ fn cm_on_l1(
     (model, sim)
 }
 
-/// The writer's batches (`Series::write` with several steps: one block solve for their fields,
-/// datasets encoded in parallel) write the same files, byte for byte, as one step at a time,
-/// and a step's reply channel receives exactly its recovered field.
-#[test]
-fn a_batch_of_steps_writes_what_one_step_at_a_time_writes() {
-    use stickslip::output::series::{Series, StepOutput};
+/// A converged step of the Cattaneo–Mindlin case on L1: (step, time, traction scale, state).
+type CmStep = (usize, f64, f64, stickslip::contact::solver::State);
+
+/// The model of the Cattaneo–Mindlin case on L1 and its converged steps.
+fn cm_steps_on_l1() -> (stickslip::model::Model, Vec<CmStep>) {
     let mut steps = Vec::new();
     let (model, _) = cm_on_l1(&mut |ev| {
         steps.push((ev.step, ev.time, ev.scale, ev.contact.cloned().unwrap()));
         Ok(())
     });
-    assert!(steps.len() >= 3, "{} steps", steps.len());
-    let picked: Vec<_> = [1, steps.len() / 2, steps.len() - 1]
-        .iter()
-        .map(|&k| steps[k].clone())
-        .collect();
-    let out = |s: &(usize, f64, f64, stickslip::contact::solver::State),
-               reply: Option<std::sync::mpsc::SyncSender<Vec<f64>>>| StepOutput {
+    (model, steps)
+}
+
+/// A step to write from its contact state, with the channel its field is sent back on, if any.
+fn step_output(
+    s: &CmStep,
+    reply: Option<std::sync::mpsc::SyncSender<Vec<f64>>>,
+) -> stickslip::output::series::StepOutput {
+    stickslip::output::series::StepOutput {
         step: s.0,
         time: s.1,
         scale: s.2,
@@ -203,7 +204,22 @@ fn a_batch_of_steps_writes_what_one_step_at_a_time_writes() {
         contact: Some(s.3.clone()),
         state: None,
         reply,
-    };
+    }
+}
+
+/// The writer's batches (`Series::write` with several steps: one block solve for their fields,
+/// datasets encoded in parallel) write the same files, byte for byte, as one step at a time,
+/// and a step's reply channel receives exactly its recovered field.
+#[test]
+fn a_batch_of_steps_writes_what_one_step_at_a_time_writes() {
+    use stickslip::output::series::Series;
+    let (model, steps) = cm_steps_on_l1();
+    assert!(steps.len() >= 3, "{} steps", steps.len());
+    let picked: Vec<_> = [1, steps.len() / 2, steps.len() - 1]
+        .iter()
+        .map(|&k| steps[k].clone())
+        .collect();
+    let out = step_output;
     let dir = tempdir("writer-batches");
     let (one, batched) = (dir.join("one"), dir.join("batched"));
     for d in [&one, &batched] {
@@ -252,23 +268,10 @@ fn a_batch_of_steps_writes_what_one_step_at_a_time_writes() {
 /// (prepared by either thread) stays behind, temporary or not.
 #[test]
 fn the_writer_with_the_driver_helping_writes_what_one_step_at_a_time_writes() {
-    use stickslip::output::series::{Background, Series, StepOutput};
-    let mut steps = Vec::new();
-    let (model, _) = cm_on_l1(&mut |ev| {
-        steps.push((ev.step, ev.time, ev.scale, ev.contact.cloned().unwrap()));
-        Ok(())
-    });
+    use stickslip::output::series::{Background, Series};
+    let (model, steps) = cm_steps_on_l1();
     assert!(steps.len() >= 6, "{} steps", steps.len());
-    let out = |s: &(usize, f64, f64, stickslip::contact::solver::State),
-               reply: Option<std::sync::mpsc::SyncSender<Vec<f64>>>| StepOutput {
-        step: s.0,
-        time: s.1,
-        scale: s.2,
-        u: None,
-        contact: Some(s.3.clone()),
-        state: None,
-        reply,
-    };
+    let out = step_output;
     let dir = tempdir("writer-helped");
     let (one, helped, failed) = (dir.join("one"), dir.join("helped"), dir.join("failed"));
     for d in [&one, &helped, &failed] {
