@@ -357,3 +357,22 @@ fn the_writer_with_the_driver_helping_writes_what_one_step_at_a_time_writes() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A writer given up without `Background::finish` (the driver returned early with an error, or
+/// unwinds) still ends — the thread scope does not wait for it for ever — after writing the
+/// steps it was handed.
+#[test]
+fn a_writer_dropped_without_finish_ends_after_writing_what_it_holds() {
+    use stickslip::output::series::{Background, Series};
+    let (model, steps) = cm_steps_on_l1();
+    let dir = tempdir("writer-dropped");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::thread::scope(|scope| {
+        let mut writer = Background::spawn(scope, Series::new(&model, &dir, "cm", false));
+        writer.send(step_output(&steps[0], None)).unwrap();
+        drop(writer);
+    });
+    let name = format!("cm_{:04}.vtu", steps[0].0);
+    assert!(dir.join(&name).is_file(), "{name} not written");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -522,6 +522,16 @@ impl<'scope, 'env> Background<'scope, 'env> {
     }
 }
 
+/// A writer given up without [`Background::finish`] (the driver returned early, or unwinds from
+/// a panic): the queue is closed, so that the writer ends once it has written what it holds
+/// instead of waiting for more steps while the thread scope waits for it.
+impl Drop for Background<'_, '_> {
+    fn drop(&mut self) {
+        self.shared.lock().closed = true;
+        self.shared.changed.notify_all();
+    }
+}
+
 /// The writer thread's work: the queue's items in order until it is closed and empty.
 fn writer_loop(shared: &Shared, series: &mut Series<'_>) -> Result<(), RunError> {
     loop {
