@@ -142,6 +142,15 @@ fn a_resumed_fig2_on_l6_writes_what_the_uninterrupted_run_writes() {
     let whole = dir.join("whole");
     let (code, err) = run(&case, &whole, &[]);
     assert_eq!(code, 0, "{err}");
+    // The later steps' capacitance systems (from 256 special rows) reuse the LU of each
+    // step's first iteration as a GMRES preconditioner, and the resumed run goes through them.
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(whole.join("summary.json")).unwrap())
+            .unwrap();
+    assert!(
+        summary["gmres_iterations"].as_u64().unwrap() > 0,
+        "no capacitance system was solved by GMRES"
+    );
     let cut = dir.join("cut");
     let (code, err) = run(&case, &cut, &[]);
     assert_eq!(code, 0, "{err}");

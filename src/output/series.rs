@@ -344,11 +344,11 @@ impl Shared {
     }
 }
 
-/// A [`Series`] written on a thread of its own, fed through a queue of [`BATCH`] steps: the
+/// A [`Series`] written on a thread of its own, fed through a queue of [`QUEUE`] steps: the
 /// driver hands it a step and goes on, and waits only when the queue is full. The writer takes
-/// the steps from the front of the queue, those waiting together (one block solve for their
-/// fields). When the driver has no more steps to solve it takes the steps still waiting from
-/// the back of the queue and prepares them itself ([`Self::finish`]), so that both cores
+/// the steps from the front of the queue, up to [`BATCH`] waiting together (one block solve
+/// for their fields). When the driver has no more steps to solve it takes the later half of
+/// the steps still waiting and prepares them itself ([`Self::help`]), so that both cores
 /// write the last steps; the writer puts them in place in their turn.
 pub struct Background<'scope, 'env> {
     shared: Arc<Shared>,
@@ -442,6 +442,9 @@ impl<'scope, 'env> Background<'scope, 'env> {
             // marker. The writer, busy with the steps before them, takes the earlier half.
             let (id, steps) = {
                 let mut q = shared.lock();
+                if q.stopped {
+                    return prepared_here;
+                }
                 let Some(end) = q
                     .items
                     .iter()
@@ -456,9 +459,6 @@ impl<'scope, 'env> Background<'scope, 'env> {
                     .rposition(|i| !matches!(i, Item::Step(_)))
                     .map_or(0, |k| k + 1);
                 let take = (end - start).div_ceil(2).min(BATCH);
-                if q.stopped {
-                    return prepared_here;
-                }
                 let id = q.next_id;
                 q.next_id += 1;
                 let steps: Vec<StepOutput> = q
@@ -563,13 +563,9 @@ fn writer_loop(shared: &Shared, series: &mut Series<'_>) -> Result<(), RunError>
             None => {
                 // The steps waiting at the front, together.
                 let mut batch = Vec::new();
-                while batch.len() < BATCH {
-                    match q.items.front() {
-                        Some(Item::Step(_)) => match q.items.pop_front() {
-                            Some(Item::Step(s)) => batch.push(*s),
-                            _ => unreachable!("the front is a step"),
-                        },
-                        _ => break,
+                while batch.len() < BATCH && matches!(q.items.front(), Some(Item::Step(_))) {
+                    if let Some(Item::Step(s)) = q.items.pop_front() {
+                        batch.push(*s);
                     }
                 }
                 shared.changed.notify_all();

@@ -5,7 +5,7 @@
 use super::{NewtonRows, PrefixFactor, SpecialRow};
 use faer::Mat;
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt::{factor as llt_factor, solve as llt_solve};
+use faer::linalg::cholesky::llt::factor as llt_factor;
 use faer::linalg::solvers::Solve;
 use std::sync::Arc;
 use std::time::Instant;
@@ -214,40 +214,18 @@ impl Block {
         })
     }
 
-    /// Solves `K X = B` in place for the columns of `b` (sequential, as `Llt::solve_in_place`
-    /// with faer's global parallelism: the same arithmetic).
+    /// Solves `K X = B` in place for the columns of `b` (sequential; the forward and backward
+    /// sweeps of faer's `llt::solve::solve_in_place_with_conj`, the same arithmetic).
     fn solve_in_place(&self, b: &mut Mat<f64>) {
-        let par = faer::Par::Seq;
-        let mut mem = MemBuffer::new(llt_solve::solve_in_place_scratch::<f64>(
-            self.l().nrows(),
-            b.ncols(),
-            par,
-        ));
-        llt_solve::solve_in_place_with_conj(
-            self.l(),
-            faer::Conj::No,
-            b.as_mut(),
-            par,
-            MemStack::new(&mut mem),
-        );
+        self.solve_in_place_below(b, 0);
     }
-}
 
-/// Block unknowns from which the columns of `G` skip the zero rows of the forward sweep
-/// ([`Block::solve_unit_columns`]). Below, the columns cost little (5 ms in all on Fig. 2 at
-/// L5), and the rounding of the whole solve is kept: on L4 the slip-controlled start of
-/// `cases/fig2_softening.json`, which crosses the ramp's kink, took five cutbacks instead of
-/// none with columns that differed from it by round-off (1e-12 relative) — a step that close
-/// to cycling is decided by the last bits.
-const TRAILING_FROM: usize = 1024;
-
-impl Block {
     /// [`Self::solve_in_place`] for right-hand sides that are zero above row `q0` (columns of
     /// the identity): the forward sweep `L y = b` leaves those rows zero, so it runs on the
-    /// trailing block `L[q0.., q0..]` alone. The columns of `G` are those of slip rows, which
-    /// (ordered by initial gap, or tangential after normal) sit late in the block: on Fig. 2 at
-    /// L7 this takes most of the forward half of their cost.
-    fn solve_unit_columns(&self, b: &mut Mat<f64>, q0: usize) {
+    /// trailing block `L[q0.., q0..]` alone (`q0 = 0`: the whole solve). The columns of `G` are
+    /// those of slip rows, which (ordered by initial gap, or tangential after normal) sit late
+    /// in the block: on Fig. 2 at L7 this takes most of the forward half of their cost.
+    fn solve_in_place_below(&self, b: &mut Mat<f64>, q0: usize) {
         use faer::linalg::triangular_solve as tri;
         let par = faer::Par::Seq;
         let l = self.l();
@@ -267,6 +245,14 @@ impl Block {
         );
     }
 }
+
+/// Block unknowns from which the columns of `G` skip the zero rows of the forward sweep
+/// ([`Block::solve_in_place_below`]). Below, the columns cost little (5 ms in all on Fig. 2 at
+/// L5), and the rounding of the whole solve is kept: on L4 the slip-controlled start of
+/// `cases/fig2_softening.json`, which crosses the ramp's kink, took five cutbacks instead of
+/// none with columns that differed from it by round-off (1e-12 relative) — a step that close
+/// to cycling is decided by the last bits.
+const TRAILING_FROM: usize = 1024;
 
 /// Whether the pivots `L_ii²` of a Cholesky factor are usable: as for an LU, singular when the
 /// smallest is below 1e-12 of the largest; and pivots within 2^52 of the smallest normal number
@@ -660,11 +646,12 @@ impl LuCache {
         for (c, &q) in qs.iter().enumerate() {
             e[(q, c)] = 1.0;
         }
-        if nk >= TRAILING_FROM {
-            block.solve_unit_columns(&mut e, qs.iter().copied().min().unwrap_or(nk));
+        let q0 = if nk >= TRAILING_FROM {
+            qs.iter().copied().min().unwrap_or(nk)
         } else {
-            block.solve_in_place(&mut e);
-        }
+            0
+        };
+        block.solve_in_place_below(&mut e, q0);
         for (c, &q) in qs.iter().enumerate() {
             self.k_cols[q] = e.col(c).iter().copied().collect();
         }
@@ -1006,6 +993,47 @@ mod tests {
         (0..w.nrows())
             .map(|i| (0..mu.len()).map(|j| w[(i, j)] * mu[j]).sum())
             .collect()
+    }
+
+    /// Columns of the identity solved with the forward sweep on the trailing block only (from
+    /// the first column's position) are `K⁻¹ e_q` as the whole solve gives them, to round-off,
+    /// and checked against `K` itself; from position 0 it is the whole solve, bit for bit.
+    #[test]
+    fn unit_columns_solved_below_their_first_row_are_the_columns_of_the_inverse() {
+        let n = 300;
+        let (a, _) = w_and_mu(n);
+        // Symmetric positive definite: A² plus a multiple of the identity.
+        let mut w = &a * &a;
+        for i in 0..n {
+            w[(i, i)] += 1.0;
+        }
+        let unk: Vec<usize> = (0..n).collect();
+        let block = Block::factorise(&w, &unk).expect("positive definite");
+        let qs = [180usize, 211, 250, 299];
+        let unit = || {
+            let mut e = Mat::<f64>::zeros(n, qs.len());
+            for (c, &q) in qs.iter().enumerate() {
+                e[(q, c)] = 1.0;
+            }
+            e
+        };
+        let (mut whole, mut below, mut from0) = (unit(), unit(), unit());
+        block.solve_in_place(&mut whole);
+        block.solve_in_place_below(&mut below, 180);
+        block.solve_in_place_below(&mut from0, 0);
+        let scale = (0..n).fold(0.0f64, |m, i| m.max(whole[(i, 0)].abs()));
+        for c in 0..qs.len() {
+            for i in 0..n {
+                assert_eq!(whole[(i, c)].to_bits(), from0[(i, c)].to_bits());
+                assert!((whole[(i, c)] - below[(i, c)]).abs() <= 1e-12 * scale);
+            }
+            // K g = e_q.
+            for i in 0..n {
+                let r: f64 = (0..n).map(|j| w[(i, j)] * below[(j, c)]).sum();
+                let e = if i == qs[c] { 1.0 } else { 0.0 };
+                assert!((r - e).abs() <= 1e-9, "row {i} of K g_{}: {r}", qs[c]);
+            }
+        }
     }
 
     #[test]
