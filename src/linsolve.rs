@@ -43,6 +43,44 @@ pub fn factor_parallelism() -> faer::Par {
     }
 }
 
+/// An `nrows × ncols` matrix whose column `j` is written by `fill(j, column)`, the columns on
+/// rayon's threads. Fresh memory costs a page fault per 4 KiB at its first write, which
+/// dominates filling it, and faer's `Mat::zeros` and `Mat::from_fn` write on the calling thread
+/// alone (the Delassus operator's two m × m arrays: 130 MB each at L7).
+pub fn mat_in_parallel(
+    nrows: usize,
+    ncols: usize,
+    fill: impl Fn(usize, &mut [f64]) + Sync,
+) -> faer::Mat<f64> {
+    use rayon::prelude::*;
+    struct Columns(*mut f64);
+    // SAFETY: each task writes its own columns of the allocation.
+    unsafe impl Sync for Columns {}
+    let mut a = faer::Mat::<f64>::with_capacity(nrows, ncols);
+    let stride = a.col_stride() as usize;
+    let base = Columns(a.as_ptr_mut());
+    (0..ncols).into_par_iter().with_min_len(32).for_each(|j| {
+        let base = &base;
+        // SAFETY: column j starts at j × stride (≥ nrows) elements of an allocation of at
+        // least `ncols` columns of that stride, and no other task touches it; its elements
+        // are zeroed before the slice is made, so the slice reads initialised values.
+        let col = unsafe {
+            let p = base.0.add(j * stride);
+            std::ptr::write_bytes(p, 0, nrows);
+            std::slice::from_raw_parts_mut(p, nrows)
+        };
+        fill(j, col);
+    });
+    // SAFETY: within the capacity, and every element is written above.
+    unsafe { a.set_dims(nrows, ncols) };
+    a
+}
+
+/// [`mat_in_parallel`] of zeros.
+pub fn zeros_in_parallel(nrows: usize, ncols: usize) -> faer::Mat<f64> {
+    mat_in_parallel(nrows, ncols, |_, _| {})
+}
+
 /// The values of a numeric factorisation: computed in this run, or mapped from a model-cache
 /// file and read in place ([`crate::cache::Reader::map_next`]), which spares a hit the copy
 /// of hundreds of MB into fresh memory.
@@ -986,7 +1024,7 @@ impl SaddleFactor {
             return None;
         }
         // L_MM with D_MM on its diagonal.
-        let mut l = faer::Mat::<f64>::zeros(m, m);
+        let mut l = zeros_in_parallel(m, m);
         for s in 0..self.layout.n_supernodes() {
             let node = self.layout.node(s, &self.values);
             let (start, pattern, ncols) = (node.start, node.pattern, node.ncols);
@@ -1024,7 +1062,7 @@ impl SaddleFactor {
             }
         }
         crate::trace::mark("delassus: L D");
-        let mut w = faer::Mat::<f64>::zeros(m, m);
+        let mut w = zeros_in_parallel(m, m);
         matmul(
             w.as_mut(),
             BlockStructure::TriangularLower,

@@ -156,13 +156,13 @@ fn leading_set(pf: &PrefixFactor, unk: &[usize]) -> Option<usize> {
 impl Block {
     /// The block of the first `p` unknowns of `pf`'s order (`W[order[..p], order[..p]]`),
     /// whose factor is the leading block of `pf`'s: no factorisation. `None` under the same
-    /// pivot test as [`Self::factorise`].
-    fn prefix(w: &Mat<f64>, pf: &Arc<PrefixFactor>, p: usize) -> Option<Block> {
+    /// pivot test as [`Self::factorise`]; `parallel` as there.
+    fn prefix(w: &Mat<f64>, pf: &Arc<PrefixFactor>, p: usize, parallel: bool) -> Option<Block> {
         let pivots: Vec<f64> = (0..p).map(|i| pf.c[(i, i)].powi(2)).collect();
         if !pivots_ok(&pivots) {
             return None;
         }
-        let (out_rows, w_out) = outside(w, &pf.order[..p]);
+        let (out_rows, w_out) = outside(w, &pf.order[..p], parallel);
         Some(Block {
             l: BlockFactor::Prefix(pf.clone(), p),
             out_rows,
@@ -179,16 +179,34 @@ impl Block {
     }
 
     /// Factorises `W[unk, unk]`; `None` if it is singular or not numerically positive definite.
-    fn factorise(w: &Mat<f64>, unk: &[usize]) -> Option<Block> {
-        // Sequential (faer's global parallelism is set so at every model build): a rayon
-        // worker waiting inside a parallel factorisation could otherwise take up another row
-        // that waits on this very block in [`BlockStore::get`].
-        debug_assert!(matches!(faer::get_global_parallelism(), faer::Par::Seq));
+    ///
+    /// `parallel`: copy and factorise on rayon's threads. faer's blocked Cholesky splits the
+    /// products of its updates by their output, never a sum, so the factor has the same bits
+    /// on any number of threads (`the_block_factor_has_the_same_bits_on_any_number_of_threads`).
+    /// Not within a [`BlockStore`]: a rayon worker waiting there for a parallel factorisation
+    /// could take up another task that waits on this very block.
+    fn factorise(w: &Mat<f64>, unk: &[usize], parallel: bool) -> Option<Block> {
         // Factorised in place from the lower half of K (faer's `Llt` would copy K into a
         // second array of the same size first: 87 MB at L7, in fresh memory).
         let n = unk.len();
-        let mut l = Mat::from_fn(n, n, |i, j| if i >= j { w[(unk[i], unk[j])] } else { 0.0 });
-        let par = faer::Par::Seq;
+        let lower = |j: usize, col: &mut [f64]| {
+            let wj = w.col(unk[j]);
+            for i in j..n {
+                col[i] = wj[unk[i]];
+            }
+        };
+        let (mut l, par) = if parallel {
+            (
+                crate::linsolve::mat_in_parallel(n, n, lower),
+                crate::linsolve::factor_parallelism(),
+            )
+        } else {
+            let mut l = Mat::<f64>::zeros(n, n);
+            for j in 0..n {
+                lower(j, l.col_as_slice_mut(j));
+            }
+            (l, faer::Par::Seq)
+        };
         let mut mem = MemBuffer::new(llt_factor::cholesky_in_place_scratch::<f64>(
             n,
             par,
@@ -206,7 +224,7 @@ impl Block {
         if !pivots_ok(&pivots) {
             return None;
         }
-        let (out_rows, w_out) = outside(w, unk);
+        let (out_rows, w_out) = outside(w, unk, parallel);
         Some(Block {
             l: BlockFactor::Owned(l),
             out_rows,
@@ -264,11 +282,25 @@ fn pivots_ok(pivots: &[f64]) -> bool {
 }
 
 /// The rows of `w` outside the unknowns `unk`, and `W[out_rows, unk]`.
-fn outside(w: &Mat<f64>, unk: &[usize]) -> (Vec<usize>, Mat<f64>) {
+fn outside(w: &Mat<f64>, unk: &[usize], parallel: bool) -> (Vec<usize>, Mat<f64>) {
     let mut inside = vec![false; w.nrows()];
     unk.iter().for_each(|&u| inside[u] = true);
     let out_rows: Vec<usize> = (0..w.nrows()).filter(|&i| !inside[i]).collect();
-    let w_out = Mat::from_fn(out_rows.len(), unk.len(), |r, q| w[(out_rows[r], unk[q])]);
+    let column = |q: usize, col: &mut [f64]| {
+        let wq = w.col(unk[q]);
+        for (c, &r) in col.iter_mut().zip(&out_rows) {
+            *c = wq[r];
+        }
+    };
+    let w_out = if parallel {
+        crate::linsolve::mat_in_parallel(out_rows.len(), unk.len(), column)
+    } else {
+        let mut w_out = Mat::<f64>::zeros(out_rows.len(), unk.len());
+        for q in 0..unk.len() {
+            column(q, w_out.col_as_slice_mut(q));
+        }
+        w_out
+    };
     (out_rows, w_out)
 }
 
@@ -316,9 +348,9 @@ impl BlockStore {
         };
         match slot {
             Some(slot) => slot
-                .get_or_init(|| Block::factorise(w, unk).map(Arc::new))
+                .get_or_init(|| Block::factorise(w, unk, false).map(Arc::new))
                 .clone(),
-            None => Block::factorise(w, unk).map(Arc::new),
+            None => Block::factorise(w, unk, false).map(Arc::new),
         }
     }
 }
@@ -835,13 +867,16 @@ impl LuCache {
         let (unk, block) = match lead {
             Some((pf, p)) => {
                 self.prefix_blocks += 1;
-                (&pf.order[..p], Block::prefix(w, pf, p).map(Arc::new))
+                (
+                    &pf.order[..p],
+                    Block::prefix(w, pf, p, self.shared.is_none()).map(Arc::new),
+                )
             }
             None => {
                 self.factorisations += 1;
                 let block = match &self.shared {
                     Some(store) => store.get(w, unk),
-                    None => Block::factorise(w, unk).map(Arc::new),
+                    None => Block::factorise(w, unk, true).map(Arc::new),
                 };
                 (unk, block)
             }
@@ -995,6 +1030,39 @@ mod tests {
             .collect()
     }
 
+    /// A block factorised on rayon's threads has the bits of the sequential factorisation, in
+    /// pools of 2, 3 and 4 threads, at sizes that cross faer's blocking thresholds, with a
+    /// subset of the unknowns (so the copy gathers rows and columns) and the rows outside.
+    #[test]
+    fn the_block_factor_has_the_same_bits_on_any_number_of_threads() {
+        for n in [60usize, 700, 1300] {
+            let (a, _) = w_and_mu(n);
+            let mut w = &a * &a;
+            for i in 0..n {
+                w[(i, i)] += 1.0;
+            }
+            let unk: Vec<usize> = (0..n).filter(|i| i % 7 != 3).rev().collect();
+            let seq = Block::factorise(&w, &unk, false).expect("positive definite");
+            for threads in [2, 3, 4] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .expect("a pool");
+                let par = pool
+                    .install(|| Block::factorise(&w, &unk, true))
+                    .expect("positive definite");
+                let (ls, lp) = (seq.l(), par.l());
+                for j in 0..unk.len() {
+                    for i in j..unk.len() {
+                        assert_eq!(ls[(i, j)].to_bits(), lp[(i, j)].to_bits(), "n {n}");
+                    }
+                }
+                assert_eq!(seq.out_rows, par.out_rows);
+                assert_eq!(seq.w_out, par.w_out);
+            }
+        }
+    }
+
     /// Columns of the identity solved with the forward sweep on the trailing block only (from
     /// the first column's position) are `K⁻¹ e_q` as the whole solve gives them, to round-off,
     /// and checked against `K` itself; from position 0 it is the whole solve, bit for bit.
@@ -1008,7 +1076,7 @@ mod tests {
             w[(i, i)] += 1.0;
         }
         let unk: Vec<usize> = (0..n).collect();
-        let block = Block::factorise(&w, &unk).expect("positive definite");
+        let block = Block::factorise(&w, &unk, false).expect("positive definite");
         let qs = [180usize, 211, 250, 299];
         let unit = || {
             let mut e = Mat::<f64>::zeros(n, qs.len());
