@@ -303,11 +303,27 @@ fn strain_of(dndx: &[[f64; 2]; 6], ue: &[f64; 12]) -> [f64; 3] {
 /// Stress (σxx, σyy, σxy, σzz) at the six nodes of an element, recovered from the three
 /// degree-2 quadrature points (ξ, η ∈ {1/6, 2/3}) by the linear field through them.
 pub fn nodal_stress(xe: &[[f64; 2]; 6], ue: &[f64; 12], mat: &Material) -> [[f64; 4]; 6] {
+    nodal_stress_at(xe, ue, mat, &stress_point_gradients())
+}
+
+/// The reference derivatives of the shape functions at the three points of
+/// [`nodal_stress`], for [`nodal_stress_at`].
+pub fn stress_point_gradients() -> [[[f64; 2]; 6]; 3] {
+    std::array::from_fn(|q| tri6::dn(TRI_3[q].0[0], TRI_3[q].0[1]))
+}
+
+/// [`nodal_stress`] with the reference derivatives `d3` of [`stress_point_gradients`]
+/// evaluated once for a loop over elements (the same bits).
+pub fn nodal_stress_at(
+    xe: &[[f64; 2]; 6],
+    ue: &[f64; 12],
+    mat: &Material,
+    d3: &[[[f64; 2]; 6]; 3],
+) -> [[f64; 4]; 6] {
     let theta = element_theta(xe, ue, mat);
     let g: [[f64; 4]; 3] = std::array::from_fn(|q| {
-        let p = TRI_3[q].0;
-        let mp = tri6::map_point(xe, p[0], p[1]);
-        mat.stress4(strain(&mp, ue), theta)
+        let (_, dndx) = tri6::gradients(xe, &d3[q]);
+        mat.stress4(strain_of(&dndx, ue), theta)
     });
     let mut out = [[0.0; 4]; 6];
     for (a, r) in tri6::NODE_REF_COORDS.iter().enumerate() {

@@ -76,6 +76,32 @@ pub struct MapPoint {
 pub fn map_point(xe: &[[f64; 2]; 6], xi: f64, eta: f64) -> MapPoint {
     let nv = n(xi, eta);
     let d = dn(xi, eta);
+    let (x, det_j, dndx) = map_with(xe, &nv, &d);
+    MapPoint {
+        x,
+        det_j,
+        dndx,
+        n: nv,
+    }
+}
+
+/// The physical derivatives `[∂N/∂x, ∂N/∂y]` of the shape functions at a reference point
+/// where they have the reference derivatives `d` ([`dn`]), and the Jacobian determinant: the
+/// arithmetic of [`map_point`] (the same bits) without evaluating the shape functions, for
+/// loops over many elements at fixed points.
+pub fn gradients(xe: &[[f64; 2]; 6], d: &[[f64; 2]; 6]) -> (f64, [[f64; 2]; 6]) {
+    let (_, det_j, dndx) = map_with(xe, &[0.0; 6], d);
+    (det_j, dndx)
+}
+
+/// The position (from the shape-function values `nv`), Jacobian determinant and physical
+/// derivatives at a reference point with reference derivatives `d`.
+#[inline(always)]
+fn map_with(
+    xe: &[[f64; 2]; 6],
+    nv: &[f64; 6],
+    d: &[[f64; 2]; 6],
+) -> ([f64; 2], f64, [[f64; 2]; 6]) {
     let mut x = [0.0; 2];
     // J[i][k] = ∂x_i/∂ξ_k
     let mut j = [[0.0; 2]; 2];
@@ -103,12 +129,7 @@ pub fn map_point(xe: &[[f64; 2]; 6], xi: f64, eta: f64) -> MapPoint {
             dndx[a][i] = d[a][0] * inv[0][i] + d[a][1] * inv[1][i];
         }
     }
-    MapPoint {
-        x,
-        det_j,
-        dndx,
-        n: nv,
-    }
+    (x, det_j, dndx)
 }
 
 /// Signed area of the straight triangle through the three vertices (positive when counter-clockwise).
