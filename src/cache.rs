@@ -1039,9 +1039,12 @@ impl Store {
         }
         let store = self.clone();
         let p = path.clone();
+        // Counted from before the thread starts, so that no solve in between sees it idle.
+        let busy = Writing::start();
         let handle = std::thread::Builder::new()
             .name("model-cache-writer".into())
             .spawn(move || {
+                let _busy = busy;
                 std::fs::create_dir_all(&store.dir)
                     .map_err(|e| format!("cannot create {}: {e}", store.dir.display()))?;
                 evict(&store.dir, store.max_bytes.saturating_sub(bytes), &p);
@@ -1062,6 +1065,35 @@ impl Store {
                 (report, None)
             }
         }
+    }
+}
+
+/// Entries being written in the background now.
+static WRITING: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// Whether an entry is being written in the background: that thread takes a core of its own
+/// (copying hundreds of MB into the page cache), and a dense kernel split over all of rayon's
+/// threads would then wait for its slowest part. The contact Newton's block factorisations
+/// run on one thread meanwhile (the same bits either way): the first load step on L7 took
+/// 252–266 ms with them on two threads, 224–229 ms on one, beside the writer (Fig. 2 with a
+/// fresh cache directory, 3 runs of each, twice).
+pub fn writing() -> bool {
+    WRITING.load(std::sync::atomic::Ordering::Relaxed) > 0
+}
+
+/// One entry being written, from its start to its drop.
+struct Writing;
+
+impl Writing {
+    fn start() -> Writing {
+        WRITING.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        Writing
+    }
+}
+
+impl Drop for Writing {
+    fn drop(&mut self) {
+        WRITING.fetch_sub(1, std::sync::atomic::Ordering::Relaxed);
     }
 }
 

@@ -547,7 +547,10 @@ mod tests {
             }
             if !shadows_overlap(&xs, &xm, n) {
                 skipped += 1;
-                assert!(found.is_none() && lost == 0, "case {k}: {found:?}, lost {lost}");
+                assert!(
+                    found.is_none() && lost == 0,
+                    "case {k}: {found:?}, lost {lost}"
+                );
             }
         }
         // The test means something: both kinds occur often.

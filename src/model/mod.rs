@@ -528,8 +528,7 @@ impl Model {
             }
         };
         if parallel {
-            let per_elem: Vec<[[f64; 4]; 6]> =
-                self.elems.par_iter().enumerate().map(one).collect();
+            let per_elem: Vec<[[f64; 4]; 6]> = self.elems.par_iter().enumerate().map(one).collect();
             for ((e, _), s) in self.elems.iter().zip(&per_elem) {
                 add(*e, s);
             }

@@ -180,9 +180,11 @@ impl Block {
 
     /// Factorises `W[unk, unk]`; `None` if it is singular or not numerically positive definite.
     ///
-    /// `parallel`: copy and factorise on rayon's threads. faer's blocked Cholesky splits the
-    /// products of its updates by their output, never a sum, so the factor has the same bits
-    /// on any number of threads (`the_block_factor_has_the_same_bits_on_any_number_of_threads`).
+    /// `parallel`: copy and factorise on rayon's threads (the factorisation on one while a
+    /// model-cache entry is written, [`crate::cache::writing`]). faer's blocked Cholesky
+    /// splits the products of its updates by their output, never a sum, so the factor has the
+    /// same bits on any number of threads
+    /// (`the_block_factor_has_the_same_bits_on_any_number_of_threads`).
     /// Not within a [`BlockStore`]: a rayon worker waiting there for a parallel factorisation
     /// could take up another task that waits on this very block.
     fn factorise(w: &Mat<f64>, unk: &[usize], parallel: bool) -> Option<Block> {
@@ -198,7 +200,11 @@ impl Block {
         let (mut l, par) = if parallel {
             (
                 crate::linsolve::mat_in_parallel(n, n, lower),
-                crate::linsolve::factor_parallelism(),
+                if crate::cache::writing() {
+                    faer::Par::Seq
+                } else {
+                    crate::linsolve::factor_parallelism()
+                },
             )
         } else {
             let mut l = Mat::<f64>::zeros(n, n);
