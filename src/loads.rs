@@ -102,6 +102,33 @@ impl EdgeOrientation {
         EdgeOrientation { map }
     }
 
+    /// [`Self::new`] for the lines of the groups `groups` only: the directed edges of the
+    /// active triangles that are one of those lines' (either way), so every query about those
+    /// lines answers as with the whole index. The index of every edge took 5 ms on L5 and
+    /// 17 ms on L7, before the model's first parallel phase; a case asks about a few thousand.
+    pub fn for_groups(mesh: &Mesh, active_tris: &[usize], groups: &[&str]) -> Self {
+        let mut wanted: HashMap<(usize, usize), (), _> =
+            HashMap::with_hasher(std::hash::BuildHasherDefault::<NodePairHasher>::default());
+        for g in groups.iter().filter_map(|name| mesh.group(name)) {
+            for &l in &g.elements {
+                let n = mesh.lines[l].nodes;
+                wanted.insert((n[0], n[1]), ());
+                wanted.insert((n[1], n[0]), ());
+            }
+        }
+        let mut map = HashMap::with_capacity_and_hasher(wanted.len() / 2, Default::default());
+        for &e in active_tris {
+            let t = &mesh.triangles[e];
+            for ed in tri6::EDGE_NODE_IDS.iter() {
+                let key = (t.nodes[ed[0]], t.nodes[ed[1]]);
+                if wanted.contains_key(&key) {
+                    map.insert(key, (e, 0));
+                }
+            }
+        }
+        EdgeOrientation { map }
+    }
+
     /// Node coordinates of line `l` ordered with the body on the left.
     pub fn oriented_coords(
         &self,

@@ -203,7 +203,7 @@ impl Model {
         let (elems, elem_body) = body_elements(case, &mesh);
         let active = active_nodes(&mesh, &elems);
         let tris: Vec<usize> = elems.iter().map(|(e, _)| *e).collect();
-        let orient = EdgeOrientation::new(&mesh, &tris);
+        let orient = EdgeOrientation::for_groups(&mesh, &tris, &curves);
         // Every boundary group must lie on the active bodies.
         for name in &curves {
             let g = mesh.group(name).expect("checked");
