@@ -144,10 +144,11 @@ pub fn check(
         let g = mesh.group(b).expect("checked above");
         {
             use rayon::prelude::*;
+            let d = jacobian_points();
             if let Some(Err(e)) = g
                 .elements
                 .par_iter()
-                .map(|&e| element_geometry(mesh, e))
+                .map(|&e| element_geometry(mesh, e, &d))
                 .find_first(Result::is_err)
             {
                 return Err(e);
@@ -189,30 +190,41 @@ pub fn check(
     })
 }
 
+/// The reference derivatives of the shape functions where [`element_geometry`] checks the
+/// Jacobian: the 6 quadrature points and the 6 nodes.
+fn jacobian_points() -> [[[f64; 2]; 6]; 12] {
+    std::array::from_fn(|k| {
+        let p = if k < 6 {
+            TRI_6[k].0
+        } else {
+            tri6::NODE_REF_COORDS[k - 6]
+        };
+        tri6::dn(p[0], p[1])
+    })
+}
+
 /// An element's geometry: not degenerate (its vertex area above round-off of its size) and
-/// a positive Jacobian at the quadrature points and the nodes.
-fn element_geometry(mesh: &Mesh, e: usize) -> Result<(), MeshCheckError> {
+/// a positive Jacobian at the quadrature points and the nodes (`d`: [`jacobian_points`]).
+fn element_geometry(mesh: &Mesh, e: usize, d: &[[[f64; 2]; 6]; 12]) -> Result<(), MeshCheckError> {
     let xe = mesh.tri_coords(e);
     let tag = mesh.triangles[e].tag;
-    let scale = (0..3)
+    // The longest vertex edge, squared.
+    let scale2 = (0..3)
         .map(|k| {
             let [a, c] = [xe[k], xe[(k + 1) % 3]];
-            (a[0] - c[0]).hypot(a[1] - c[1])
+            (a[0] - c[0]).powi(2) + (a[1] - c[1]).powi(2)
         })
         .fold(0.0, f64::max);
     let area = tri6::vertex_area(&xe);
-    if area.is_nan() || area <= 1e-12 * scale * scale {
+    if area.is_nan() || area <= 1e-12 * scale2 {
         return Err(MeshCheckError::Degenerate {
             path: path(mesh),
             tag,
         });
     }
-    let pts = TRI_6
+    let min_det = d
         .iter()
-        .map(|(p, _)| *p)
-        .chain(tri6::NODE_REF_COORDS.iter().copied());
-    let min_det = pts
-        .map(|p| tri6::map_point(&xe, p[0], p[1]).det_j)
+        .map(|d| tri6::jacobian_det(&xe, d))
         .fold(f64::INFINITY, f64::min);
     if min_det.is_nan() || min_det <= 0.0 {
         return Err(MeshCheckError::BadJacobian {

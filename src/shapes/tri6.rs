@@ -94,6 +94,20 @@ pub fn gradients(xe: &[[f64; 2]; 6], d: &[[f64; 2]; 6]) -> (f64, [[f64; 2]; 6]) 
     (det_j, dndx)
 }
 
+/// The Jacobian determinant alone at a reference point with reference derivatives `d`: the
+/// arithmetic of [`map_point`]'s (the same bits).
+pub fn jacobian_det(xe: &[[f64; 2]; 6], d: &[[f64; 2]; 6]) -> f64 {
+    let mut j = [[0.0; 2]; 2];
+    for a in 0..6 {
+        for i in 0..2 {
+            for k in 0..2 {
+                j[i][k] += xe[a][i] * d[a][k];
+            }
+        }
+    }
+    j[0][0] * j[1][1] - j[0][1] * j[1][0]
+}
+
 /// The position (from the shape-function values `nv`), Jacobian determinant and physical
 /// derivatives at a reference point with reference derivatives `d`.
 #[inline(always)]
