@@ -91,6 +91,43 @@ pub fn vec_in_parallel(n: usize) -> Vec<f64> {
     v
 }
 
+/// Element access to a matrix from several rayon tasks at once, for loops whose tasks touch
+/// disjoint elements (each use states why).
+struct SharedMat {
+    ptr: *mut f64,
+    stride: usize,
+}
+
+// SAFETY: the users write disjoint elements from different tasks (see `SharedMat`).
+unsafe impl Sync for SharedMat {}
+
+impl SharedMat {
+    fn of(a: &mut faer::Mat<f64>) -> SharedMat {
+        SharedMat {
+            stride: a.col_stride() as usize,
+            ptr: a.as_ptr_mut(),
+        }
+    }
+
+    /// SAFETY: (i, j) in bounds, and no other task writes it meanwhile.
+    unsafe fn get(&self, i: usize, j: usize) -> f64 {
+        unsafe { *self.ptr.add(i + j * self.stride) }
+    }
+
+    /// SAFETY: (i, j) in bounds, and no other task reads or writes it meanwhile.
+    unsafe fn set(&self, i: usize, j: usize, v: f64) {
+        unsafe { *self.ptr.add(i + j * self.stride) = v }
+    }
+}
+
+/// `task(jb)` for the block starts `jb = 0, tile, 2 tile, …` below `m`, on rayon's threads.
+fn for_blocks(m: usize, tile: usize, task: impl Fn(usize) + Sync) {
+    use rayon::prelude::*;
+    (0..m.div_ceil(tile))
+        .into_par_iter()
+        .for_each(|b| task(b * tile));
+}
+
 /// [`mat_in_parallel`] of zeros.
 pub fn zeros_in_parallel(nrows: usize, ncols: usize) -> faer::Mat<f64> {
     mat_in_parallel(nrows, ncols, |_, _| {})
@@ -1091,17 +1128,21 @@ impl SaddleFactor {
         );
         crate::trace::mark("delassus: product");
         // The upper half from the lower, in tiles (so that the transposed writes stay in
-        // cache: 130 MB at L7).
+        // cache: 130 MB at L7), the row blocks of the upper half on rayon's threads (each
+        // writes its own rows above the diagonal and reads below it).
         const TILE: usize = 64;
-        for jb in (0..m).step_by(TILE) {
+        let ws = SharedMat::of(&mut w);
+        for_blocks(m, TILE, |jb| {
             for ib in (jb..m).step_by(TILE) {
                 for j in jb..(jb + TILE).min(m) {
                     for i in (j + 1).max(ib)..(ib + TILE).min(m) {
-                        w[(j, i)] = w[(i, j)];
+                        // SAFETY: (j, i) is above the diagonal in this task's rows, (i, j)
+                        // below it: no task writes what another reads or writes.
+                        unsafe { ws.set(j, i, ws.get(i, j)) };
                     }
                 }
             }
-        }
+        });
         crate::trace::mark("delassus: symmetric");
         if !keep_factor {
             return Some((w, None));
@@ -1110,22 +1151,34 @@ impl SaddleFactor {
         // j, scaled by (−d_j)^½ (in tiles, so that the transposed reads stay in cache); the
         // strict upper half is cleared.
         let s: Vec<f64> = (0..m).map(|j| (-l[(j, j)]).sqrt()).collect();
-        for jb in (0..m).step_by(TILE) {
+        let ls = SharedMat::of(&mut l);
+        for_blocks(m, TILE, |jb| {
             for ib in (jb..m).step_by(TILE) {
                 for j in jb..(jb + TILE).min(m) {
                     for i in (j + 1).max(ib)..(ib + TILE).min(m) {
-                        l[(i, j)] = l[(j, i)] * s[j];
+                        // SAFETY: (i, j) is below the diagonal in this task's columns, (j, i)
+                        // above it: no task writes what another reads or writes.
+                        unsafe { ls.set(i, j, ls.get(j, i) * s[j]) };
                     }
                 }
             }
-        }
+        });
         for (j, &sj) in s.iter().enumerate() {
             l[(j, j)] = sj;
         }
-        for j in 1..m {
-            for i in 0..j {
-                l[(i, j)] = 0.0;
-            }
+        {
+            use rayon::prelude::*;
+            l.par_col_chunks_mut(TILE)
+                .enumerate()
+                .for_each(|(b, cols)| {
+                    let mut cols = cols;
+                    for c in 0..cols.ncols() {
+                        let j = b * TILE + c;
+                        for i in 0..j {
+                            cols[(i, c)] = 0.0;
+                        }
+                    }
+                });
         }
         Some((w, Some(l)))
     }

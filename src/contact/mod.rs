@@ -198,15 +198,22 @@ impl ContactModel {
 /// permutation (one spare column: the Delassus operator is 130 MB at L7, and a second copy
 /// would raise the run's peak memory).
 fn to_mu_order(w: &mut faer::Mat<f64>, pos: &[usize]) {
+    use rayon::prelude::*;
     let m = pos.len();
-    let mut tmp = vec![0.0; m];
-    for j in 0..m {
-        let col = w.col(j);
-        for (t, &p) in tmp.iter_mut().zip(pos) {
-            *t = col[p];
+    // The rows of each column permuted, the columns on rayon's threads.
+    w.par_col_chunks_mut(64).for_each(|cols| {
+        let mut cols = cols;
+        let mut tmp = vec![0.0; m];
+        for c in 0..cols.ncols() {
+            for (t, &p) in tmp.iter_mut().zip(pos) {
+                *t = cols[(p, c)];
+            }
+            for (i, t) in tmp.iter().enumerate() {
+                cols[(i, c)] = *t;
+            }
         }
-        w.col_mut(j).iter_mut().zip(&tmp).for_each(|(x, t)| *x = *t);
-    }
+    });
+    let mut tmp = vec![0.0; m];
     // Column j of the result is column pos[j] of the row-permuted array.
     let mut done = vec![false; m];
     for start in 0..m {
