@@ -507,18 +507,22 @@ impl Sums {
 mod tests {
     use super::*;
 
+    /// A xorshift stream of numbers uniform in [−1, 1).
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+    }
+
     /// `shadows_overlap` says `false` only where `segment_on` along that direction finds no
     /// segment and counts no lost crossing: random curved edge pairs, many of them near each
     /// other's shadow, at three scales.
     #[test]
     fn skipped_edge_pairs_have_no_segment() {
-        let mut seed: u64 = 0x9e37_79b9_7f4a_7c15;
-        let mut rng = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut rng = uniform(0x9e37_79b9_7f4a_7c15);
         let (mut skipped, mut segments) = (0, 0);
         for k in 0..100_000 {
             let scale = [1e-3, 1.0, 30.0][k % 3];
@@ -564,13 +568,7 @@ mod tests {
     /// checked over random curved edges and lines, many of them near tangency or far off.
     #[test]
     fn skipped_projections_never_land_on_the_interval() {
-        let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
-        let mut rng = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut rng = uniform(0x2545_f491_4f6c_dd1d);
         let (mut skipped, mut hits) = (0, 0);
         for k in 0..200_000 {
             let scale = [1e-3, 1.0, 30.0][k % 3];
