@@ -43,34 +43,31 @@ pub fn factor_parallelism() -> faer::Par {
     }
 }
 
-/// An `nrows × ncols` matrix whose column `j` is written by `fill(j, column)`, the columns on
-/// rayon's threads. Fresh memory costs a page fault per 4 KiB at its first write, which
-/// dominates filling it, and faer's `Mat::zeros` and `Mat::from_fn` write on the calling thread
-/// alone (the Delassus operator's two m × m arrays: 130 MB each at L7).
-pub fn mat_in_parallel(
+/// An `nrows × ncols` matrix whose column `j` is written by `fill(j, column)` over zeros, the
+/// columns on rayon's threads with `parallel`, else on the calling thread. Fresh memory costs a
+/// page fault per 4 KiB at its first write, which dominates filling it, and faer's `Mat::zeros`
+/// and `Mat::from_fn` write on the calling thread alone (the Delassus operator's two m × m
+/// arrays: 130 MB each at L7). Sequential where a rayon worker must not wait (a sweep's block
+/// store).
+pub fn mat_filled(
     nrows: usize,
     ncols: usize,
+    parallel: bool,
     fill: impl Fn(usize, &mut [f64]) + Sync,
 ) -> faer::Mat<f64> {
     use rayon::prelude::*;
-    struct Columns(*mut f64);
-    // SAFETY: each task writes its own columns of the allocation.
-    unsafe impl Sync for Columns {}
     let mut a = faer::Mat::<f64>::with_capacity(nrows, ncols);
-    let stride = a.col_stride() as usize;
-    let base = Columns(a.as_ptr_mut());
-    (0..ncols).into_par_iter().with_min_len(32).for_each(|j| {
-        let base = &base;
-        // SAFETY: column j starts at j × stride (≥ nrows) elements of an allocation of at
-        // least `ncols` columns of that stride, and no other task touches it; its elements
-        // are zeroed before the slice is made, so the slice reads initialised values.
-        let col = unsafe {
-            let p = base.0.add(j * stride);
-            std::ptr::write_bytes(p, 0, nrows);
-            std::slice::from_raw_parts_mut(p, nrows)
-        };
-        fill(j, col);
-    });
+    let cols = SharedMat::of(&mut a);
+    let one = |j: usize| {
+        // SAFETY: column j lies within the capacity, and only this call touches it; its
+        // elements are zeroed before the slice is made, so the slice reads initialised values.
+        fill(j, unsafe { cols.zeroed_column(j, nrows) })
+    };
+    if parallel {
+        (0..ncols).into_par_iter().with_min_len(32).for_each(one);
+    } else {
+        (0..ncols).for_each(one);
+    }
     // SAFETY: within the capacity, and every element is written above.
     unsafe { a.set_dims(nrows, ncols) };
     a
@@ -118,6 +115,18 @@ impl SharedMat {
     unsafe fn set(&self, i: usize, j: usize, v: f64) {
         unsafe { *self.ptr.add(i + j * self.stride) = v }
     }
+
+    /// The first `len` elements of column `j`, zeroed first (they may be uninitialised).
+    /// SAFETY: `len` ≤ the stride, column `j` within the allocation, and no other task touches
+    /// it while the slice lives.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn zeroed_column(&self, j: usize, len: usize) -> &mut [f64] {
+        unsafe {
+            let p = self.ptr.add(j * self.stride);
+            std::ptr::write_bytes(p, 0, len);
+            std::slice::from_raw_parts_mut(p, len)
+        }
+    }
 }
 
 /// `task(jb)` for the block starts `jb = 0, tile, 2 tile, …` below `m`, on rayon's threads.
@@ -128,9 +137,9 @@ fn for_blocks(m: usize, tile: usize, task: impl Fn(usize) + Sync) {
         .for_each(|b| task(b * tile));
 }
 
-/// [`mat_in_parallel`] of zeros.
+/// [`mat_filled`] of zeros, on rayon's threads.
 pub fn zeros_in_parallel(nrows: usize, ncols: usize) -> faer::Mat<f64> {
-    mat_in_parallel(nrows, ncols, |_, _| {})
+    mat_filled(nrows, ncols, true, |_, _| {})
 }
 
 /// The values of a numeric factorisation: computed in this run, or mapped from a model-cache

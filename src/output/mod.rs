@@ -74,9 +74,7 @@ mod direct {
     /// usual way), `Err` on any other failure.
     #[cfg(target_os = "linux")]
     pub fn write(path: &Path, parts: &[&[u8]], len: usize) -> std::io::Result<bool> {
-        use std::io::Write;
         use std::os::unix::fs::OpenOptionsExt;
-        let unsupported = |e: &std::io::Error| e.raw_os_error() == Some(libc::EINVAL);
         let mut f = match std::fs::OpenOptions::new()
             .write(true)
             .create(true)
@@ -85,25 +83,37 @@ mod direct {
             .open(path)
         {
             Ok(f) => f,
-            Err(e) if unsupported(&e) => return Ok(false),
+            Err(e) if e.raw_os_error() == Some(libc::EINVAL) => return Ok(false),
             Err(e) => return Err(e),
         };
+        if !copy_out(&mut f, parts)? {
+            drop(f);
+            std::fs::remove_file(path)?;
+            return Ok(false);
+        }
+        f.set_len(len as u64)?;
+        f.sync_all().ok();
+        Ok(true)
+    }
+
+    /// Writes `parts` to `f` (opened with `O_DIRECT`) through an aligned buffer, the last block
+    /// padded to the alignment (the caller cuts the file back). `Ok(false)` when the first
+    /// write is refused as unsupported (a file system can accept the flag and refuse that).
+    #[cfg(target_os = "linux")]
+    fn copy_out(f: &mut std::fs::File, parts: &[&[u8]]) -> std::io::Result<bool> {
+        use std::io::Write;
         let layout = std::alloc::Layout::from_size_align(CHUNK, ALIGN).expect("a valid layout");
         let owner = Aligned::new(layout);
         // SAFETY: `owner` holds `CHUNK` zeroed bytes until the end of the function.
         let buf = unsafe { std::slice::from_raw_parts_mut(owner.0, CHUNK) };
-        let mut fill = 0;
-        let mut first = true;
-        let mut flush = |bytes: &[u8], first: &mut bool| -> std::io::Result<bool> {
-            match f.write_all(bytes) {
-                Ok(()) => {
-                    *first = false;
-                    Ok(true)
-                }
-                // A file system can accept the flag and refuse the first write.
-                Err(e) if *first && unsupported(&e) => Ok(false),
-                Err(e) => Err(e),
+        let (mut fill, mut first) = (0, true);
+        let mut flush = |bytes: &[u8]| match f.write_all(bytes) {
+            Ok(()) => {
+                first = false;
+                Ok(true)
             }
+            Err(e) if first && e.raw_os_error() == Some(libc::EINVAL) => Ok(false),
+            Err(e) => Err(e),
         };
         for p in parts {
             let mut p: &[u8] = p;
@@ -113,28 +123,19 @@ mod direct {
                 fill += n;
                 p = &p[n..];
                 if fill == CHUNK {
-                    if !flush(buf, &mut first)? {
-                        drop(f);
-                        std::fs::remove_file(path)?;
+                    if !flush(buf)? {
                         return Ok(false);
                     }
                     fill = 0;
                 }
             }
         }
-        if fill > 0 {
-            // The last block padded to the alignment, and the file cut back to its length.
-            let padded = fill.div_ceil(ALIGN) * ALIGN;
-            buf[fill..padded].fill(0);
-            if !flush(&buf[..padded], &mut first)? {
-                drop(f);
-                std::fs::remove_file(path)?;
-                return Ok(false);
-            }
+        if fill == 0 {
+            return Ok(true);
         }
-        f.set_len(len as u64)?;
-        f.sync_all().ok();
-        Ok(true)
+        let padded = fill.div_ceil(ALIGN) * ALIGN;
+        buf[fill..padded].fill(0);
+        flush(&buf[..padded])
     }
 
     #[cfg(not(target_os = "linux"))]

@@ -97,6 +97,16 @@ pub fn gradients(xe: &[[f64; 2]; 6], d: &[[f64; 2]; 6]) -> (f64, [[f64; 2]; 6]) 
 /// The Jacobian determinant alone at a reference point with reference derivatives `d`: the
 /// arithmetic of [`map_point`]'s (the same bits).
 pub fn jacobian_det(xe: &[[f64; 2]; 6], d: &[[f64; 2]; 6]) -> f64 {
+    det2(&jacobian(xe, d))
+}
+
+fn det2(j: &[[f64; 2]; 2]) -> f64 {
+    j[0][0] * j[1][1] - j[0][1] * j[1][0]
+}
+
+/// `J[i][k] = ∂x_i/∂ξ_k` at a reference point with reference derivatives `d`.
+#[inline(always)]
+fn jacobian(xe: &[[f64; 2]; 6], d: &[[f64; 2]; 6]) -> [[f64; 2]; 2] {
     let mut j = [[0.0; 2]; 2];
     for a in 0..6 {
         for i in 0..2 {
@@ -105,7 +115,7 @@ pub fn jacobian_det(xe: &[[f64; 2]; 6], d: &[[f64; 2]; 6]) -> f64 {
             }
         }
     }
-    j[0][0] * j[1][1] - j[0][1] * j[1][0]
+    j
 }
 
 /// The position (from the shape-function values `nv`), Jacobian determinant and physical
@@ -117,17 +127,13 @@ fn map_with(
     d: &[[f64; 2]; 6],
 ) -> ([f64; 2], f64, [[f64; 2]; 6]) {
     let mut x = [0.0; 2];
-    // J[i][k] = ∂x_i/∂ξ_k
-    let mut j = [[0.0; 2]; 2];
     for a in 0..6 {
         for i in 0..2 {
             x[i] += nv[a] * xe[a][i];
-            for k in 0..2 {
-                j[i][k] += xe[a][i] * d[a][k];
-            }
         }
     }
-    let det_j = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+    let j = jacobian(xe, d);
+    let det_j = det2(&j);
     let inv = if det_j != 0.0 {
         [
             [j[1][1] / det_j, -j[0][1] / det_j],

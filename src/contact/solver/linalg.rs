@@ -197,21 +197,11 @@ impl Block {
                 col[i] = wj[unk[i]];
             }
         };
-        let (mut l, par) = if parallel {
-            (
-                crate::linsolve::mat_in_parallel(n, n, lower),
-                if crate::cache::writing() {
-                    faer::Par::Seq
-                } else {
-                    crate::linsolve::factor_parallelism()
-                },
-            )
+        let mut l = crate::linsolve::mat_filled(n, n, parallel, lower);
+        let par = if parallel && !crate::cache::writing() {
+            crate::linsolve::factor_parallelism()
         } else {
-            let mut l = Mat::<f64>::zeros(n, n);
-            for j in 0..n {
-                lower(j, l.col_as_slice_mut(j));
-            }
-            (l, faer::Par::Seq)
+            faer::Par::Seq
         };
         let mut mem = MemBuffer::new(llt_factor::cholesky_in_place_scratch::<f64>(
             n,
@@ -298,15 +288,7 @@ fn outside(w: &Mat<f64>, unk: &[usize], parallel: bool) -> (Vec<usize>, Mat<f64>
             *c = wq[r];
         }
     };
-    let w_out = if parallel {
-        crate::linsolve::mat_in_parallel(out_rows.len(), unk.len(), column)
-    } else {
-        let mut w_out = Mat::<f64>::zeros(out_rows.len(), unk.len());
-        for q in 0..unk.len() {
-            column(q, w_out.col_as_slice_mut(q));
-        }
-        w_out
-    };
+    let w_out = crate::linsolve::mat_filled(out_rows.len(), unk.len(), parallel, column);
     (out_rows, w_out)
 }
 
