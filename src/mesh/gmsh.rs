@@ -60,75 +60,35 @@ pub fn read(path: &Path) -> Result<Mesh, MeshReadError> {
 }
 
 /// Parses the bytes of a mesh file; `path` is used for messages only.
+///
+/// The nodes and elements of a well-formed binary file are read directly
+/// ([`super::msh_binary`]), the rest of it (and any other file) through `mshio`.
 pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
+    parse_with(bytes, path, true)
+}
+
+/// [`parse`], reading the nodes and elements directly when `direct` allows it.
+fn parse_with(bytes: &[u8], path: &Path, allow_direct: bool) -> Result<Mesh, MeshReadError> {
     let p = path.display().to_string();
     check_header(bytes, &p)?;
     let names = physical_names(bytes, &p)?;
-    let msh = mshio::parse_msh_bytes(bytes).map_err(|e| MeshReadError::Parse {
-        path: p.clone(),
-        detail: short_parse_error(&format!("{e}")),
-    })?;
-
-    let NodeTable {
-        nodes,
-        node_tags,
-        index_of,
-    } = read_nodes(bytes, &msh, &p)?;
-    let entity_phys = entity_physical_tags(&msh);
-
-    let mut mesh = Mesh {
-        source: path.to_path_buf(),
-        nodes,
-        node_tags,
-        ..Default::default()
+    let mut read = match allow_direct.then(|| direct(bytes, &p)).flatten() {
+        Some(read) => read,
+        None => through_mshio(bytes, &p)?,
     };
-    let mut group_index: HashMap<(i32, i32), usize> = HashMap::new();
-    let elements = msh.data.elements.as_ref().ok_or(MeshReadError::Empty {
-        path: p.clone(),
-        what: "$Elements section",
-    })?;
-    for block in &elements.element_blocks {
-        let kind = block.element_type as u8;
-        let dim = block.entity_dim;
-        if kind == 15 || dim == 0 {
-            continue; // points carry no stiffness or load
-        }
-        let phys = entity_phys
-            .get(&(dim, block.entity_tag))
-            .cloned()
-            .unwrap_or_default();
-        check_block_type(block, &p)?;
-        let local = push_block_elements(&mut mesh, block, &index_of, &p)?;
-        for ph in phys {
-            let key = (dim, ph.abs());
-            let gi = *group_index.entry(key).or_insert_with(|| {
-                let name = names.get(&key).cloned().unwrap_or_else(|| {
-                    format!(
-                        "{}{}",
-                        if dim == 2 { "surface_" } else { "curve_" },
-                        ph.abs()
-                    )
-                });
-                mesh.groups.push(Group {
-                    name,
-                    dim: if dim == 2 {
-                        GroupDim::Surface
-                    } else {
-                        GroupDim::Curve
-                    },
-                    tag: ph.abs(),
-                    elements: Vec::new(),
-                });
-                mesh.groups.len() - 1
-            });
-            mesh.groups[gi].elements.extend_from_slice(&local);
-        }
+    let mut groups = Groups {
+        names: &names,
+        index: HashMap::new(),
+        entity_phys: std::mem::take(&mut read.entity_phys),
+    };
+    for (entity, local) in std::mem::take(&mut read.blocks) {
+        groups.add(&mut read, entity, &local);
     }
     // Named groups that have no elements at all (declared but empty) are kept, so that a check
     // can report them as empty rather than as missing.
     for (&(dim, tag), name) in &names {
-        if (dim == 1 || dim == 2) && !group_index.contains_key(&(dim, tag)) {
-            mesh.groups.push(Group {
+        if (dim == 1 || dim == 2) && !groups.index.contains_key(&(dim, tag)) {
+            read.mesh.groups.push(Group {
                 name: name.clone(),
                 dim: if dim == 2 {
                     GroupDim::Surface
@@ -140,8 +100,152 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
             });
         }
     }
+    let mut mesh = read.mesh;
+    mesh.source = path.to_path_buf();
     reorient_clockwise(&mut mesh);
     Ok(mesh)
+}
+
+/// A mesh as read, before its physical groups: the elements of each block (by the block's
+/// entity, `(dim, tag)`) and each entity's physical tags.
+#[derive(Default)]
+struct Read {
+    mesh: Mesh,
+    blocks: Vec<((i32, i32), Vec<usize>)>,
+    entity_phys: HashMap<(i32, i32), Vec<i32>>,
+}
+
+/// The physical groups as they are built from the blocks, in file order.
+struct Groups<'a> {
+    names: &'a HashMap<(i32, i32), String>,
+    /// Group of each (dim, physical tag).
+    index: HashMap<(i32, i32), usize>,
+    entity_phys: HashMap<(i32, i32), Vec<i32>>,
+}
+
+impl Groups<'_> {
+    /// Adds the elements `local` of a block on entity `(dim, tag)` to the groups of its
+    /// physical tags (named by `$PhysicalNames`, else `surface_N` / `curve_N`).
+    fn add(&mut self, read: &mut Read, (dim, entity): (i32, i32), local: &[usize]) {
+        let phys = self
+            .entity_phys
+            .get(&(dim, entity))
+            .cloned()
+            .unwrap_or_default();
+        for ph in phys {
+            let key = (dim, ph.abs());
+            let gi = *self.index.entry(key).or_insert_with(|| {
+                let name = self.names.get(&key).cloned().unwrap_or_else(|| {
+                    format!(
+                        "{}{}",
+                        if dim == 2 { "surface_" } else { "curve_" },
+                        ph.abs()
+                    )
+                });
+                read.mesh.groups.push(Group {
+                    name,
+                    dim: if dim == 2 {
+                        GroupDim::Surface
+                    } else {
+                        GroupDim::Curve
+                    },
+                    tag: ph.abs(),
+                    elements: Vec::new(),
+                });
+                read.mesh.groups.len() - 1
+            });
+            read.mesh.groups[gi].elements.extend_from_slice(local);
+        }
+    }
+}
+
+/// The binary file `bytes` read directly: `mshio` for what comes before the `$Nodes` section
+/// (header, entities), [`super::msh_binary`] for the nodes and elements. `None` when the file
+/// is not one it reads (see there), and the whole file then goes through `mshio`.
+fn direct(bytes: &[u8], p: &str) -> Option<Read> {
+    let size_t = binary_little_endian(bytes)?;
+    let start = super::msh_binary::nodes_start(bytes)?;
+    let body = super::msh_binary::read(&bytes[start..], size_t)?;
+    let head = mshio::parse_msh_bytes(&bytes[..start]).ok()?;
+    if head.data.nodes.is_some() || head.data.elements.is_some() {
+        return None;
+    }
+    let index_of = TagIndex::new(&body.node_tags);
+    let mut read = Read {
+        mesh: Mesh {
+            nodes: body.nodes,
+            node_tags: body.node_tags,
+            ..Default::default()
+        },
+        entity_phys: entity_physical_tags(&head),
+        ..Default::default()
+    };
+    for b in &body.blocks {
+        // A node the file does not have: `mshio`'s path reports it.
+        let local = push_elements(&mut read.mesh, b.kind, b.elements(), &index_of, p).ok()?;
+        read.blocks.push(((b.dim, b.entity_tag), local));
+    }
+    Some(read)
+}
+
+/// The data size of a binary little-endian MSH 4.1 file (`$MeshFormat`, `4.1 1 <size>`, then
+/// the integer 1 in the file's byte order); `None` for any other file.
+fn binary_little_endian(bytes: &[u8]) -> Option<usize> {
+    let first = bytes.iter().position(|&b| b == b'\n')? + 1;
+    let second = first + bytes[first..].iter().position(|&b| b == b'\n')? + 1;
+    if bytes[..first].trim_ascii() != b"$MeshFormat" {
+        return None;
+    }
+    let line = std::str::from_utf8(&bytes[first..second]).ok()?;
+    let mut it = line.split_ascii_whitespace();
+    let (version, kind, size) = (it.next()?, it.next()?, it.next()?);
+    if version != "4.1" || kind != "1" || it.next().is_some() {
+        return None;
+    }
+    let size: usize = size.parse().ok()?;
+    (bytes.get(second..second + 4)? == 1i32.to_le_bytes()).then_some(size)
+}
+
+/// The whole file through `mshio`.
+fn through_mshio(bytes: &[u8], p: &str) -> Result<Read, MeshReadError> {
+    let msh = mshio::parse_msh_bytes(bytes).map_err(|e| MeshReadError::Parse {
+        path: p.into(),
+        detail: short_parse_error(&format!("{e}")),
+    })?;
+
+    let NodeTable {
+        nodes,
+        node_tags,
+        index_of,
+    } = read_nodes(bytes, &msh, p)?;
+    let mut read = Read {
+        mesh: Mesh {
+            nodes,
+            node_tags,
+            ..Default::default()
+        },
+        entity_phys: entity_physical_tags(&msh),
+        ..Default::default()
+    };
+    let elements = msh.data.elements.as_ref().ok_or(MeshReadError::Empty {
+        path: p.into(),
+        what: "$Elements section",
+    })?;
+    for block in &elements.element_blocks {
+        let kind = block.element_type as u8;
+        let dim = block.entity_dim;
+        if kind == 15 || dim == 0 {
+            continue; // points carry no stiffness or load
+        }
+        check_block_type(block, p)?;
+        let elements = block
+            .elements
+            .iter()
+            .map(|e| (e.element_tag, e.nodes.as_slice()));
+        let local = push_elements(&mut read.mesh, kind, elements, &index_of, p)?;
+        read.blocks.push(((dim, block.entity_tag), local));
+    }
+    Ok(read)
 }
 
 /// Refuses anything but MSH 4.1 with a data size of 4 or 8.
@@ -320,38 +424,35 @@ fn check_block_type(block: &mshio::ElementBlock<u64, i32>, p: &str) -> Result<()
     Ok(())
 }
 
-/// Appends the elements of a (checked) block to `mesh.triangles` or `mesh.lines`, resolving
-/// node tags to indices; returns their indices in that list.
-fn push_block_elements(
+/// Appends the elements `(tag, node tags)` of a (checked) block of gmsh type `kind` (9 or 8)
+/// to `mesh.triangles` or `mesh.lines`, resolving node tags to indices; returns their indices
+/// in that list.
+fn push_elements<'e>(
     mesh: &mut Mesh,
-    block: &mshio::ElementBlock<u64, i32>,
+    kind: u8,
+    elements: impl Iterator<Item = (u64, &'e [u64])>,
     index_of: &TagIndex,
     p: &str,
 ) -> Result<Vec<usize>, MeshReadError> {
-    let kind = block.element_type as u8;
-    let mut local = Vec::with_capacity(block.elements.len());
-    for el in &block.elements {
+    let mut local = Vec::with_capacity(elements.size_hint().0);
+    for (tag, nodes) in elements {
         let idx = |t: u64| {
             index_of.get(t).ok_or_else(|| MeshReadError::MissingNode {
                 path: p.into(),
-                tag: el.element_tag,
+                tag,
                 node: t,
             })
         };
         // The element's nodes as mesh indices, checking the count.
         let resolve = |want: usize| -> Result<[usize; 6], MeshReadError> {
-            if el.nodes.len() != want {
+            if nodes.len() != want {
                 return Err(MeshReadError::Parse {
                     path: p.into(),
-                    detail: format!(
-                        "element {} has {} nodes, {want} expected",
-                        el.element_tag,
-                        el.nodes.len()
-                    ),
+                    detail: format!("element {tag} has {} nodes, {want} expected", nodes.len()),
                 });
             }
             let mut n = [0usize; 6];
-            for (k, &t) in el.nodes.iter().enumerate() {
+            for (k, &t) in nodes.iter().enumerate() {
                 n[k] = idx(t)?;
             }
             Ok(n)
@@ -361,14 +462,14 @@ fn push_block_elements(
             local.push(mesh.triangles.len());
             mesh.triangles.push(Tri6 {
                 nodes: std::array::from_fn(|k| n[k]),
-                tag: el.element_tag,
+                tag,
             });
         } else {
             let n = resolve(3)?;
             local.push(mesh.lines.len());
             mesh.lines.push(Lin3 {
                 nodes: std::array::from_fn(|k| n[k]),
-                tag: el.element_tag,
+                tag,
             });
         }
     }
@@ -537,5 +638,98 @@ fn short_parse_error(s: &str) -> String {
         "malformed or truncated file".into()
     } else {
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every mesh file in `meshes/` (the generated L6 and L7 too when they are there).
+    fn mesh_files() -> Vec<std::path::PathBuf> {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes");
+        let mut v: Vec<_> = std::fs::read_dir(dir)
+            .expect("meshes/")
+            .map(|e| e.expect("entry").path())
+            .filter(|p| p.extension().is_some_and(|e| e == "msh"))
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn both_readers_give_the_same_mesh() {
+        let mut direct_files = 0;
+        for path in mesh_files() {
+            let bytes = std::fs::read(&path).expect("read");
+            let p = path.display().to_string();
+            let binary = binary_little_endian(&bytes).is_some();
+            assert_eq!(
+                direct(&bytes, &p).is_some(),
+                binary,
+                "{p}: the direct reader takes exactly the binary files"
+            );
+            direct_files += binary as usize;
+            let a = parse_with(&bytes, &path, true).map(|m| format!("{m:?}"));
+            let b = parse_with(&bytes, &path, false).map(|m| format!("{m:?}"));
+            match (a, b) {
+                (Ok(a), Ok(b)) => assert!(a == b, "{p}: the two readers differ"),
+                (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string(), "{p}"),
+                (a, b) => panic!("{p}: {:?} against {:?}", a.err(), b.err()),
+            }
+        }
+        // L0-L5, block_hertz, pad_flat, pad_flat_lead.
+        assert!(direct_files >= 9, "{direct_files} binary meshes");
+    }
+
+    /// A binary file cut short, or whose element names a node it does not have, is left to
+    /// `mshio`'s path, and reported as before.
+    #[test]
+    fn damaged_binary_files_get_mshio_errors() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/vm272_L0.msh");
+        let bytes = std::fs::read(&path).expect("read");
+        let at = |w: &[u8]| {
+            bytes
+                .windows(w.len())
+                .position(|x| x == w)
+                .expect("section")
+        };
+        let elements = at(b"$Elements");
+        let mut cases = vec![
+            bytes[..elements + 200].to_vec(),
+            bytes[..at(b"$EndNodes") - 8].to_vec(),
+            [&bytes[..], b"$Junk\n"].concat(),
+        ];
+        // The first element's first node tag made one no node has.
+        let mut missing = bytes.clone();
+        let first = elements + "$Elements\n".len() + 32;
+        let mut k = first;
+        loop {
+            // Block header: dim, entity, type (3 × 4 bytes), count (8 bytes).
+            let kind = i32::from_le_bytes(missing[k + 8..k + 12].try_into().unwrap());
+            let n = u64::from_le_bytes(missing[k + 12..k + 20].try_into().unwrap()) as usize;
+            let per = match kind {
+                15 => 1,
+                8 => 3,
+                9 => 6,
+                _ => panic!("type {kind}"),
+            };
+            if kind == 9 {
+                missing[k + 28..k + 36].copy_from_slice(&(1u64 << 40).to_le_bytes());
+                break;
+            }
+            k += 20 + n * 8 * (per + 1);
+        }
+        cases.push(missing);
+        for (i, b) in cases.iter().enumerate() {
+            assert!(direct(b, "x").is_none(), "case {i}");
+            let a = parse_with(b, &path, true)
+                .map(|_| ())
+                .expect_err("an error");
+            let m = parse_with(b, &path, false)
+                .map(|_| ())
+                .expect_err("an error");
+            assert_eq!(a.to_string(), m.to_string(), "case {i}");
+        }
     }
 }

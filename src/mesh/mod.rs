@@ -6,6 +6,7 @@
 pub mod check;
 pub mod gmsh;
 pub mod info;
+mod msh_binary;
 
 use std::path::PathBuf;
 
