@@ -199,19 +199,28 @@ impl Key {
     }
 }
 
-/// The key material: length-prefixed fields, floats by their bits.
-struct KeyBuilder(Vec<u8>);
+/// The key material: length-prefixed fields, floats by their bits, hashed as it comes (two
+/// seeds: 128 bits) rather than gathered first (the mesh file is most of it).
+struct KeyBuilder([Xxh64; 2]);
 
 impl KeyBuilder {
+    fn new() -> KeyBuilder {
+        KeyBuilder([Xxh64::new(0), Xxh64::new(0x005e_ed0f_ca11)])
+    }
+    fn raw(&mut self, b: &[u8]) {
+        for h in &mut self.0 {
+            h.update(b);
+        }
+    }
     fn bytes(&mut self, b: &[u8]) {
-        self.0.extend_from_slice(&(b.len() as u64).to_le_bytes());
-        self.0.extend_from_slice(b);
+        self.raw(&(b.len() as u64).to_le_bytes());
+        self.raw(b);
     }
     fn str(&mut self, s: &str) {
         self.bytes(s.as_bytes());
     }
     fn u64(&mut self, v: u64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
+        self.raw(&v.to_le_bytes());
     }
     fn f64(&mut self, v: f64) {
         self.u64(v.to_bits());
@@ -226,7 +235,7 @@ impl KeyBuilder {
         }
     }
     fn finish(&self) -> Key {
-        Key([xxh64(&self.0, 0), xxh64(&self.0, 0x005e_ed0f_ca11)])
+        Key([self.0[0].finish(), self.0[1].finish()])
     }
 }
 
@@ -253,7 +262,7 @@ pub fn build_id() -> Result<u64, String> {
 /// factorisation is bit-identical with any). `gap` is the candidate gap the pair was built
 /// with (`None` without contact).
 pub fn model_key(case: &Case, mesh_bytes: &[u8], gap: Option<f64>) -> Result<Key, String> {
-    let mut k = KeyBuilder(Vec::with_capacity(mesh_bytes.len() + 1024));
+    let mut k = KeyBuilder::new();
     k.str("stickslip model cache");
     k.u64(FORMAT as u64);
     k.str(env!("CARGO_PKG_VERSION"));

@@ -68,11 +68,19 @@ pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
     let (mut gap, doublings) = (resume.as_ref().and_then(|s| s.candidate_gap), 8);
     let store = crate::cache::Store::resolve(&opts.cache, opts.level() >= LogLevel::Warn);
     // The run's identity (a hash of the case and mesh files, which the restart states carry:
-    // 25 ms at L7) on a thread of its own while the model is built, whose first phases leave
-    // a core idle.
+    // 25 ms at L7), and the program's for the model cache, on a thread of their own while the
+    // model is built, whose first phases leave a core idle.
     let case = &case;
     std::thread::scope(|scope| {
-        let mut id_job = Some(scope.spawn(|| restart::run_id(case, case_path)));
+        let cached = store.is_ok();
+        let mut id_job = Some(scope.spawn(move || {
+            // The program's identity for the model cache's key (reading and hashing the
+            // executable, 5 ms), before the main thread asks for it.
+            if cached {
+                let _ = crate::cache::build_id();
+            }
+            restart::run_id(case, case_path)
+        }));
         let mut id = String::new();
         for _ in 0..doublings {
             let mut model = Model::build_cached(case, case_path, gap, store.as_ref().ok())?;
