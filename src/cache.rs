@@ -1058,6 +1058,7 @@ impl Store {
                     .map_err(|e| format!("cannot create {}: {e}", store.dir.display()))?;
                 evict(&store.dir, store.max_bytes.saturating_sub(bytes), &p);
                 write_entry(&p, key, &entry).map_err(|e| e.to_string())?;
+                crate::trace::mark("cache entry written");
                 Ok(())
             });
         match handle {
