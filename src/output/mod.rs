@@ -176,6 +176,59 @@ pub fn commit(tmp: &Path, path: &Path) -> std::io::Result<()> {
     })
 }
 
+/// The files a run's output replaces, closed on a thread of their own. Renaming a new file
+/// over an old one deletes the old one there and then, and deleting an 11 MB `.vtu` costs
+/// about 2 ms on the machine of `docs/benchmarks.md` (a run written into the directory of an
+/// earlier one replaces every file): held open across the rename, the old file is deleted when
+/// this thread closes it instead, off the writer's path. Dropping the reaper waits for it.
+pub struct Reaper {
+    tx: Option<std::sync::mpsc::Sender<std::fs::File>>,
+    handle: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Reaper {
+    pub fn new() -> Reaper {
+        let (tx, rx) = std::sync::mpsc::channel::<std::fs::File>();
+        let handle = std::thread::Builder::new()
+            .name("stickslip-reaper".into())
+            .spawn(move || rx.into_iter().for_each(drop))
+            .ok();
+        Reaper {
+            tx: handle.as_ref().map(|_| tx),
+            handle,
+        }
+    }
+
+    /// [`commit`], the file it replaces (if any) closed on the reaper's thread.
+    pub fn commit(&self, tmp: &Path, path: &Path) -> std::io::Result<()> {
+        let old = match &self.tx {
+            Some(_) => std::fs::File::open(path).ok(),
+            None => None,
+        };
+        commit(tmp, path)?;
+        if let (Some(f), Some(tx)) = (old, &self.tx) {
+            // A reaper that has gone (it cannot, short of a panic) leaves the closing here.
+            let _ = tx.send(f);
+        }
+        Ok(())
+    }
+}
+
+impl Default for Reaper {
+    fn default() -> Self {
+        Reaper::new()
+    }
+}
+
+impl Drop for Reaper {
+    fn drop(&mut self) {
+        self.tx.take();
+        if let Some(h) = self.handle.take() {
+            let _ = h.join();
+        }
+    }
+}
+
 /// A stable 64-bit FNV-1a hash of byte strings (each prefixed by its length), as hex: the
 /// identity of a run or a sweep (its case file, mesh file, sweep file, program version),
 /// which restart states and sweep parts carry.
@@ -260,6 +313,33 @@ mod tests {
     /// through `O_DIRECT` (a disk-backed temporary directory) and through `/dev/shm` (tmpfs,
     /// which may refuse the flag: the buffered path), reads back byte for byte, and leaves no
     /// temporary file.
+    #[test]
+    fn the_reaper_replaces_files_and_leaves_nothing_else() {
+        let dir = std::env::temp_dir().join(format!("stickslip-reaper-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (old, fresh) = (dir.join("a.vtu"), dir.join("b.vtu"));
+        std::fs::write(&old, vec![1u8; 3 << 20]).unwrap();
+        let reaper = Reaper::new();
+        for (path, bytes) in [(&old, b"new a".as_slice()), (&fresh, b"new b".as_slice())] {
+            let tmp = write_temporary(path, &[bytes]).unwrap();
+            reaper.commit(&tmp, path).unwrap();
+            assert_eq!(std::fs::read(path).unwrap(), bytes);
+        }
+        // A temporary file that is not there: an error, and the file it would replace kept.
+        let missing = dir.join(".gone.tmp");
+        assert!(reaper.commit(&missing, &old).is_err());
+        assert_eq!(std::fs::read(&old).unwrap(), b"new a");
+        drop(reaper);
+        let mut names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["a.vtu", "b.vtu"]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn large_files_read_back_as_written() {
         let bytes: Vec<u8> = (0..(9 << 20) + 4_321u32)

@@ -179,6 +179,8 @@ impl Bodies<'_> {
 pub struct Series<'a> {
     bodies: Bodies<'a>,
     entries: Vec<PvdEntry>,
+    /// The files of an earlier run that this one replaces are closed here.
+    reaper: super::Reaper,
     /// Seconds spent writing so far.
     pub seconds: f64,
 }
@@ -194,6 +196,7 @@ impl<'a> Series<'a> {
                 mesh: Arc::default(),
             },
             entries: Vec::new(),
+            reaper: super::Reaper::new(),
             seconds: 0.0,
         }
     }
@@ -241,7 +244,9 @@ impl<'a> Series<'a> {
                     .expect("one bodies file per step")
                     .and_then(|(tmp, name)| {
                         let path = dir.join(&name);
-                        super::commit(&tmp, &path).map_err(|source| write_error(&path, source))?;
+                        self.reaper
+                            .commit(&tmp, &path)
+                            .map_err(|source| write_error(&path, source))?;
                         crate::trace::mark("bodies file written");
                         self.write_files(s, name)
                     });
@@ -257,6 +262,16 @@ impl<'a> Series<'a> {
         Ok(())
     }
 
+    /// Writes `bytes` to `path` atomically (the file it replaces closed by the reaper), the
+    /// error naming the file.
+    fn put(&self, path: &Path, bytes: &[u8]) -> Result<(), RunError> {
+        let tmp =
+            super::write_temporary(path, &[bytes]).map_err(|source| write_error(path, source))?;
+        self.reaper
+            .commit(&tmp, path)
+            .map_err(|source| write_error(path, source))
+    }
+
     /// Writes one step's files after its bodies dataset (written as `name`).
     fn write_files(&mut self, s: StepOutput, name: String) -> Result<(), RunError> {
         let (model, stem, step) = (self.bodies.model, self.bodies.stem, s.step);
@@ -269,25 +284,25 @@ impl<'a> Series<'a> {
         });
         if let Some(st) = &s.contact {
             let cname = format!("{stem}_contact_{step:04}.vtu");
-            write_file(&dir.join(&cname), &contact_vtu(model, st, compress))?;
+            self.put(&dir.join(&cname), &contact_vtu(model, st, compress))?;
             self.entries.push(PvdEntry {
                 time: s.time,
                 part: 1,
                 file: cname,
             });
-            write_file(
+            self.put(
                 &dir.join(format!("contact_{step:04}.csv")),
                 contact_csv(model, st).as_bytes(),
             )?;
         }
-        write_file(
+        self.put(
             &dir.join(format!("{stem}.pvd")),
             pvd(&self.entries).as_bytes(),
         )?;
         // The state to resume from, after the step's files.
         if let Some(mut saved) = s.state {
             saved.pvd = self.entries.clone();
-            write_file(
+            self.put(
                 &dir.join(restart::state_name(step)),
                 serde_json::to_string(&saved)
                     .expect("serialisable")
