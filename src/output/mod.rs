@@ -199,11 +199,12 @@ impl Reaper {
         }
     }
 
-    /// [`commit`], the file it replaces (if any) closed on the reaper's thread.
+    /// [`commit`], the file it replaces (if any) closed on the reaper's thread. (Only where a
+    /// file held open can be renamed over: Unix.)
     pub fn commit(&self, tmp: &Path, path: &Path) -> std::io::Result<()> {
         let old = match &self.tx {
-            Some(_) => std::fs::File::open(path).ok(),
-            None => None,
+            Some(_) if cfg!(unix) => std::fs::File::open(path).ok(),
+            _ => None,
         };
         commit(tmp, path)?;
         if let (Some(f), Some(tx)) = (old, &self.tx) {
