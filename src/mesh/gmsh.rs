@@ -682,6 +682,69 @@ mod tests {
         assert!(direct_files >= 9, "{direct_files} binary meshes");
     }
 
+    /// Node tags that are not 1..N (gmsh writes them after a renumbering; `mshio` then keeps
+    /// them itself): the file's tags rewritten to 7t + 100 in both sections, read both ways.
+    #[test]
+    fn sparse_node_tags_read_alike() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/vm272_L0.msh");
+        let mut b = std::fs::read(&path).expect("read");
+        let at = |b: &[u8], w: &[u8]| b.windows(w.len()).position(|x| x == w).expect("section");
+        let word = |b: &[u8], k: usize| u64::from_le_bytes(b[k..k + 8].try_into().unwrap());
+        let map = |t: u64| 7 * t + 100;
+        let rewrite = |b: &mut Vec<u8>, k: usize| {
+            let t = map(word(b, k));
+            b[k..k + 8].copy_from_slice(&t.to_le_bytes());
+        };
+        // $Nodes: blocks, total, min, max; per block dim, entity, parametric, count, tags, xyz.
+        let mut k = at(&b, b"$Nodes\n") + "$Nodes\n".len();
+        let blocks = word(&b, k);
+        for j in [16, 24] {
+            rewrite(&mut b, k + j);
+        }
+        k += 32;
+        for _ in 0..blocks {
+            let n = word(&b, k + 12) as usize;
+            k += 20;
+            for i in 0..n {
+                rewrite(&mut b, k + 8 * i);
+            }
+            k += 32 * n;
+        }
+        // $Elements: per block dim, entity, type, count, then tag and node tags per element.
+        let mut k = at(&b, b"$Elements\n") + "$Elements\n".len();
+        let blocks = word(&b, k);
+        k += 32;
+        for _ in 0..blocks {
+            let kind = i32::from_le_bytes(b[k + 8..k + 12].try_into().unwrap());
+            let n = word(&b, k + 12) as usize;
+            let per = match kind {
+                15 => 1,
+                8 => 3,
+                9 => 6,
+                _ => panic!("type {kind}"),
+            };
+            k += 20;
+            for e in 0..n {
+                for v in 0..per {
+                    rewrite(&mut b, k + 8 * (e * (per + 1) + 1 + v));
+                }
+            }
+            k += 8 * n * (per + 1);
+        }
+        assert!(direct(&b, "x").is_some(), "the direct reader takes it");
+        let a = parse_with(&b, &path, true).expect("direct");
+        let m = parse_with(&b, &path, false).expect("mshio");
+        assert_eq!(format!("{a:?}"), format!("{m:?}"));
+        assert_eq!(a.node_tags.iter().min(), Some(&map(1)));
+        // The same mesh as the file with its own tags, but for the tags.
+        let plain = parse_with(&std::fs::read(&path).unwrap(), &path, true).unwrap();
+        assert_eq!(plain.nodes, a.nodes);
+        assert_eq!(
+            plain.triangles.iter().map(|t| t.nodes).collect::<Vec<_>>(),
+            a.triangles.iter().map(|t| t.nodes).collect::<Vec<_>>()
+        );
+    }
+
     /// A binary file cut short, or whose element names a node it does not have, is left to
     /// `mshio`'s path, and reported as before.
     #[test]
