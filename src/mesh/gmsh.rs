@@ -1,5 +1,6 @@
 //! Reading gmsh MSH 4.1 files (ASCII or binary) through `mshio`, plus the `$PhysicalNames`
-//! section, which `mshio` skips.
+//! section, which `mshio` skips; the nodes and elements of a well-formed binary file are read
+//! directly ([`super::msh_binary`]).
 //!
 //! Only 6-node triangles (type 9) and 3-node lines (type 8) are kept as elements; points
 //! (type 15) are ignored; any other type in a physical group is an error naming the element.
@@ -72,35 +73,11 @@ fn parse_with(bytes: &[u8], path: &Path, allow_direct: bool) -> Result<Mesh, Mes
     let p = path.display().to_string();
     check_header(bytes, &p)?;
     let names = physical_names(bytes, &p)?;
-    let mut read = match allow_direct.then(|| direct(bytes, &p)).flatten() {
+    let read = match allow_direct.then(|| direct(bytes, &p)).flatten() {
         Some(read) => read,
         None => through_mshio(bytes, &p)?,
     };
-    let mut groups = Groups {
-        names: &names,
-        index: HashMap::new(),
-        entity_phys: std::mem::take(&mut read.entity_phys),
-    };
-    for (entity, local) in std::mem::take(&mut read.blocks) {
-        groups.add(&mut read, entity, &local);
-    }
-    // Named groups that have no elements at all (declared but empty) are kept, so that a check
-    // can report them as empty rather than as missing.
-    for (&(dim, tag), name) in &names {
-        if (dim == 1 || dim == 2) && !groups.index.contains_key(&(dim, tag)) {
-            read.mesh.groups.push(Group {
-                name: name.clone(),
-                dim: if dim == 2 {
-                    GroupDim::Surface
-                } else {
-                    GroupDim::Curve
-                },
-                tag,
-                elements: Vec::new(),
-            });
-        }
-    }
-    let mut mesh = read.mesh;
+    let mut mesh = with_groups(read, &names);
     mesh.source = path.to_path_buf();
     reorient_clockwise(&mut mesh);
     Ok(mesh)
@@ -115,48 +92,48 @@ struct Read {
     entity_phys: HashMap<(i32, i32), Vec<i32>>,
 }
 
-/// The physical groups as they are built from the blocks, in file order.
-struct Groups<'a> {
-    names: &'a HashMap<(i32, i32), String>,
-    /// Group of each (dim, physical tag).
-    index: HashMap<(i32, i32), usize>,
-    entity_phys: HashMap<(i32, i32), Vec<i32>>,
-}
-
-impl Groups<'_> {
-    /// Adds the elements `local` of a block on entity `(dim, tag)` to the groups of its
-    /// physical tags (named by `$PhysicalNames`, else `surface_N` / `curve_N`).
-    fn add(&mut self, read: &mut Read, (dim, entity): (i32, i32), local: &[usize]) {
-        let phys = self
-            .entity_phys
-            .get(&(dim, entity))
-            .cloned()
-            .unwrap_or_default();
-        for ph in phys {
+/// The mesh of `read` with its physical groups, in file order: each block's elements added to
+/// the groups of its entity's physical tags (named by `$PhysicalNames`, else `surface_N` /
+/// `curve_N`), then the named groups that have no elements at all (declared but empty), so
+/// that a check can report them as empty rather than as missing.
+fn with_groups(read: Read, names: &HashMap<(i32, i32), String>) -> Mesh {
+    let Read {
+        mut mesh,
+        blocks,
+        entity_phys,
+    } = read;
+    let group = |name: String, dim: i32, tag: i32| Group {
+        name,
+        dim: if dim == 2 {
+            GroupDim::Surface
+        } else {
+            GroupDim::Curve
+        },
+        tag,
+        elements: Vec::new(),
+    };
+    // Group of each (dim, physical tag).
+    let mut index: HashMap<(i32, i32), usize> = HashMap::new();
+    for ((dim, entity), local) in blocks {
+        for ph in entity_phys.get(&(dim, entity)).into_iter().flatten() {
             let key = (dim, ph.abs());
-            let gi = *self.index.entry(key).or_insert_with(|| {
-                let name = self.names.get(&key).cloned().unwrap_or_else(|| {
-                    format!(
-                        "{}{}",
-                        if dim == 2 { "surface_" } else { "curve_" },
-                        ph.abs()
-                    )
+            let gi = *index.entry(key).or_insert_with(|| {
+                let name = names.get(&key).cloned().unwrap_or_else(|| {
+                    let kind = if dim == 2 { "surface_" } else { "curve_" };
+                    format!("{kind}{}", ph.abs())
                 });
-                read.mesh.groups.push(Group {
-                    name,
-                    dim: if dim == 2 {
-                        GroupDim::Surface
-                    } else {
-                        GroupDim::Curve
-                    },
-                    tag: ph.abs(),
-                    elements: Vec::new(),
-                });
-                read.mesh.groups.len() - 1
+                mesh.groups.push(group(name, dim, ph.abs()));
+                mesh.groups.len() - 1
             });
-            read.mesh.groups[gi].elements.extend_from_slice(local);
+            mesh.groups[gi].elements.extend_from_slice(&local);
         }
     }
+    for (&(dim, tag), name) in names {
+        if (dim == 1 || dim == 2) && !index.contains_key(&(dim, tag)) {
+            mesh.groups.push(group(name.clone(), dim, tag));
+        }
+    }
+    mesh
 }
 
 /// The binary file `bytes` read directly: `mshio` for what comes before the `$Nodes` section
