@@ -149,7 +149,10 @@ pub struct Input<'a> {
 
 /// All checks of a finished run.
 pub fn run_checks(inp: &Input) -> Vec<Check> {
-    let mut out = vec![equilibrium(inp), displacement(inp)];
+    crate::trace::mark("checks: start");
+    let e = equilibrium(inp);
+    crate::trace::mark("checks: equilibrium");
+    let mut out = vec![e, displacement(inp)];
     if let (Some(st), Some(_)) = (inp.state, &inp.model.contact) {
         out.extend(contact_checks(inp, st));
     }

@@ -84,18 +84,31 @@ impl Material {
     }
 }
 
+/// The reference derivatives of the shape functions at the points of [`TRI_6`] (for
+/// [`tri6::gradients`]: the element loops over the rule then map only the gradients, with the
+/// bits of [`tri6::map_point`]).
+const TRI_6_DN: [[[f64; 2]; 6]; 6] = {
+    let mut d = [[[0.0; 2]; 6]; 6];
+    let mut q = 0;
+    while q < 6 {
+        d[q] = tri6::dn(TRI_6[q].0[0], TRI_6[q].0[1]);
+        q += 1;
+    }
+    d
+};
+
 /// The element mean of the divergence row, `b̄ = (1/A) ∫ (N_a,x, N_a,y) dA` (12 entries),
 /// and the element area A.
 pub fn mean_divergence(xe: &[[f64; 2]; 6]) -> ([f64; 12], f64) {
     let mut b = [0.0; 12];
     let mut area = 0.0;
-    for (p, w) in TRI_6.iter() {
-        let mp = tri6::map_point(xe, p[0], p[1]);
-        let s = w * mp.det_j;
+    for ((_, w), d) in TRI_6.iter().zip(&TRI_6_DN) {
+        let (det_j, dndx) = tri6::gradients(xe, d);
+        let s = w * det_j;
         area += s;
         for a in 0..6 {
-            b[2 * a] += s * mp.dndx[a][0];
-            b[2 * a + 1] += s * mp.dndx[a][1];
+            b[2 * a] += s * dndx[a][0];
+            b[2 * a + 1] += s * dndx[a][1];
         }
     }
     b.iter_mut().for_each(|v| *v /= area);
@@ -132,10 +145,9 @@ pub fn element_stiffness(xe: &[[f64; 2]; 6], mat: &Material) -> [f64; 144] {
     }
     let (l, m) = mat.lame();
     let mut k = [0.0; 144];
-    for (p, w) in TRI_6.iter() {
-        let mp = tri6::map_point(xe, p[0], p[1]);
-        let s = w * mp.det_j;
-        let g = &mp.dndx;
+    for ((_, w), d) in TRI_6.iter().zip(&TRI_6_DN) {
+        let (det_j, g) = tri6::gradients(xe, d);
+        let s = w * det_j;
         for a in 0..6 {
             for b in 0..6 {
                 let (ax, ay, bx, by) = (g[a][0], g[a][1], g[b][0], g[b][1]);
@@ -153,10 +165,9 @@ pub fn element_stiffness(xe: &[[f64; 2]; 6], mat: &Material) -> [f64; 144] {
 fn mixed_element_stiffness(xe: &[[f64; 2]; 6], mat: &Material) -> [f64; 144] {
     let (l, m) = mat.lame();
     let mut k = [0.0; 144];
-    for (p, w) in TRI_6.iter() {
-        let mp = tri6::map_point(xe, p[0], p[1]);
-        let s = w * mp.det_j;
-        let g = &mp.dndx;
+    for ((_, w), d) in TRI_6.iter().zip(&TRI_6_DN) {
+        let (det_j, g) = tri6::gradients(xe, d);
+        let s = w * det_j;
         for a in 0..6 {
             for b in 0..6 {
                 let (ax, ay, bx, by) = (g[a][0], g[a][1], g[b][0], g[b][1]);
@@ -200,11 +211,11 @@ pub fn force_geometry(xe: &[[f64; 2]; 6], mat: &Material) -> ForceGeometry {
     } else {
         (l + 2.0 * m, m)
     };
-    for (q, (p, w)) in TRI_6.iter().enumerate() {
-        let mp = tri6::map_point(xe, p[0], p[1]);
-        s[q] = w * mp.det_j;
-        dndx[q] = mp.dndx;
-        for (a, g) in mp.dndx.iter().enumerate() {
+    for (q, ((_, w), d)) in TRI_6.iter().zip(&TRI_6_DN).enumerate() {
+        let (det_j, g6) = tri6::gradients(xe, d);
+        s[q] = w * det_j;
+        dndx[q] = g6;
+        for (a, g) in g6.iter().enumerate() {
             let (ax, ay) = (g[0], g[1]);
             diag[2 * a] += s[q] * (a_xx * ax * ax + a_yy * ay * ay);
             diag[2 * a + 1] += s[q] * (a_xx * ay * ay + a_yy * ax * ax);

@@ -1,5 +1,7 @@
 //! An opt-in timeline of a run: with `STICKSLIP_TRACE=1`, [`mark`] prints the milliseconds
-//! since the process started (first call of [`start`]) and a label to standard error. Used to
+//! since the process started (first call of [`start`]), the process's minor page faults so far
+//! (each a page of memory touched for the first time, ≈ 1.2 µs here) and a label to standard
+//! error. Used to
 //! find where the wall time of a run goes outside the timed phases of `summary.json`.
 
 use std::sync::OnceLock;
@@ -27,8 +29,23 @@ pub fn mark(label: impl std::fmt::Display) {
         let ms = t0.elapsed().as_secs_f64() * 1e3;
         let thread = std::thread::current();
         eprintln!(
-            "trace {ms:9.1} ms [{}] {label}",
+            "trace {ms:9.1} ms {:7} faults [{}] {label}",
+            minor_faults(),
             thread.name().unwrap_or("-")
         );
     }
+}
+
+/// The process's minor page faults so far (memory touched for the first time), or 0 where the
+/// count is not available.
+fn minor_faults() -> i64 {
+    #[cfg(unix)]
+    {
+        // SAFETY: getrusage writes the struct it is given.
+        let mut r: libc::rusage = unsafe { std::mem::zeroed() };
+        if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut r) } == 0 {
+            return r.ru_minflt;
+        }
+    }
+    0
 }

@@ -44,8 +44,9 @@ pub fn n(xi: f64, eta: f64) -> [f64; 6] {
     ]
 }
 
-/// Derivatives `[∂N/∂ξ, ∂N/∂η]` of the shape functions at (ξ, η).
-pub fn dn(xi: f64, eta: f64) -> [[f64; 2]; 6] {
+/// Derivatives `[∂N/∂ξ, ∂N/∂η]` of the shape functions at (ξ, η) (`const`: tables of them at
+/// the points of a rule are built at compile time, with the same IEEE arithmetic).
+pub const fn dn(xi: f64, eta: f64) -> [[f64; 2]; 6] {
     let l0 = 1.0 - xi - eta;
     let (l1, l2) = (xi, eta);
     // ∂L0/∂ξ = ∂L0/∂η = −1; ∂L1/∂ξ = 1; ∂L2/∂η = 1.
