@@ -320,16 +320,9 @@ pub enum ContactError {
 impl ContactSystem {
     /// `y = w0 + W μ`.
     fn y(&self, w0: &[f64], mu: &[f64]) -> Vec<f64> {
-        let m = w0.len();
         let mut y = w0.to_vec();
-        for (j, &mj) in mu.iter().enumerate() {
-            if mj != 0.0 {
-                let col = self.w.col(j);
-                for i in 0..m {
-                    y[i] += col[i] * mj;
-                }
-            }
-        }
+        let terms = mu.iter().enumerate().filter(|&(_, &mj)| mj != 0.0);
+        linalg::add_columns(&mut y, &self.w, terms.map(|(j, &mj)| (j, mj)));
         y
     }
 
