@@ -36,6 +36,15 @@ pub enum Factor {
 }
 
 impl Factor {
+    /// Gives up the factor's hold on its values ([`SaddleFactor::release`]): `None` for a
+    /// factor without contact, whose solves a run needs to its end. Any later solve panics.
+    pub fn release(&self) -> Option<crate::linsolve::SharedValues> {
+        match self {
+            Factor::Partial(_) => None,
+            Factor::Saddle(s) => s.release(),
+        }
+    }
+
     /// Solves `K̂ x = b` in place.
     pub fn solve_in_place(&self, b: &mut [f64]) {
         match self {

@@ -430,8 +430,9 @@ pub struct SaddleSymbolic {
 /// A numeric `L D Lᵀ` factorisation of a saddle-point matrix (see [`SaddleSymbolic`]).
 pub struct SaddleFactor {
     layout: std::sync::Arc<Supernodes>,
-    /// The factor's values, shared with a model-cache writer ([`crate::cache`]).
-    values: SharedValues,
+    /// The factor's values, shared with a model-cache writer ([`crate::cache`]); `None` once
+    /// released ([`Self::release`]).
+    values: std::sync::Mutex<Option<SharedValues>>,
     n: usize,
     m: usize,
     /// Per supernode with columns of `K̂`, the supernode, its columns of `K̂` and its pattern
@@ -684,11 +685,12 @@ impl SaddleSymbolic {
                 }
             })?;
         let f = self.from_values(std::sync::Arc::new(FactorValues::Owned(l)))?;
+        let values = f.values();
         // K̂ must be positive definite: every pivot of its block positive (a body that nothing
         // holds gives a vanishing or negative one).
         let mut dmax: f64 = 0.0;
         for s in 0..f.layout.n_supernodes() {
-            let node = f.layout.node(s, &f.values);
+            let node = f.layout.node(s, &values);
             for j in 0..node.ncols {
                 let col = node.start + j;
                 if col >= n {
@@ -1013,7 +1015,7 @@ impl SaddleFactor {
         }
         Ok(SaddleFactor {
             layout,
-            values,
+            values: std::sync::Mutex::new(Some(values)),
             n,
             m,
             plan: std::sync::OnceLock::new(),
@@ -1026,8 +1028,24 @@ impl SaddleFactor {
     }
 
     /// The values of the factor (shared, not copied).
+    ///
+    /// # Panics
+    /// Once the values are released ([`Self::release`]).
     pub fn values(&self) -> SharedValues {
-        self.values.clone()
+        self.values
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .clone()
+            .expect("a saddle factor's values used after their release")
+    }
+
+    /// Gives up this factor's hold on its values: once the solves that started before have
+    /// ended (and a model-cache writer has written them), the memory can be freed, on the
+    /// caller's schedule, while the rest of the model is still in use (a run releases the
+    /// factor once its last field is recovered, so that freeing hundreds of MB overlaps the
+    /// output and the summary instead of following them). Any later solve panics.
+    pub fn release(&self) -> Option<SharedValues> {
+        self.values.lock().unwrap_or_else(|p| p.into_inner()).take()
     }
 
     /// Order of `K̂`.
@@ -1055,6 +1073,7 @@ impl SaddleFactor {
         if n == 0 || ncols == 0 {
             return;
         }
+        let values = self.values();
         let fwd = &self.layout.fwd;
         // Permuted copy, constraint rows zero (they are never read below).
         let mut x = vec![0.0; size * ncols];
@@ -1067,7 +1086,7 @@ impl SaddleFactor {
         // (the constraint rows come last in every pattern) and its values.
         let plan = self.plan.get_or_init(|| {
             (0..self.layout.n_supernodes())
-                .map(|s| (s, self.layout.node(s, &self.values)))
+                .map(|s| (s, self.layout.node(s, &values)))
                 .take_while(|(_, node)| node.start < n)
                 .map(|(s, node)| {
                     let kp = node.pattern.partition_point(|&r| r < n);
@@ -1078,7 +1097,7 @@ impl SaddleFactor {
         let nodes: Vec<_> = plan
             .iter()
             .map(|&(s, wk, kp)| {
-                let node = self.layout.node(s, &self.values);
+                let node = self.layout.node(s, &values);
                 (node.start, wk, kp, node)
             })
             .collect();
@@ -1128,10 +1147,11 @@ impl SaddleFactor {
         if !whole {
             return None;
         }
+        let values = self.values();
         // L_MM with D_MM on its diagonal.
         let mut l = zeros_in_parallel(m, m);
         for s in 0..self.layout.n_supernodes() {
-            let node = self.layout.node(s, &self.values);
+            let node = self.layout.node(s, &values);
             let (start, pattern, ncols) = (node.start, node.pattern, node.ncols);
             if start + ncols <= n {
                 continue;
@@ -1258,6 +1278,32 @@ mod tests {
         }
         let y = vec![vec![(3, 1.0), (4, -1.0)], vec![(n - 1, 1.0)]];
         (col_ptr, row_idx, values, y)
+    }
+
+    #[test]
+    fn a_released_factor_hands_over_its_values_once_and_solves_no_more() {
+        let n = 12;
+        let (cp, ri, kv, y) = small_saddle(n);
+        let sym = SaddleSymbolic::analyse(n, &cp, &ri, &y).unwrap();
+        let f = sym.factorise(&kv, &y).unwrap();
+        let mut x = vec![1.0; n];
+        f.solve_in_place(&mut x);
+        // A solve that holds the values keeps them alive past the release.
+        let held = f.values();
+        let released = f.release().expect("held until now");
+        assert!(std::sync::Arc::ptr_eq(&held, &released));
+        assert_eq!(std::sync::Arc::strong_count(&released), 2);
+        drop(held);
+        assert!(
+            std::sync::Arc::try_unwrap(released).is_ok(),
+            "the last holder"
+        );
+        assert!(f.release().is_none(), "released once");
+        let after = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let mut x = vec![1.0; n];
+            f.solve_in_place(&mut x);
+        }));
+        assert!(after.is_err(), "a solve after the release panics");
     }
 
     #[test]

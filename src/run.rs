@@ -270,6 +270,15 @@ pub fn run_model(
             // None when the writer stopped on an error first (reported by `finish` below).
             sim.last_u = rx.recv().ok();
         }
+        // Every field is recovered, or its recovery has started (the writer took the steps
+        // left): the factor's values are freed once those end, on a thread of their own, while
+        // the output and the summary are finished (hundreds of MB, which would otherwise be
+        // freed after them: 10 ms on L5, 45 ms on L7).
+        if sim.last_u.is_some()
+            && let Some(values) = model.condensed.chol.release()
+        {
+            scope.spawn(move || free_when_unshared(values));
+        }
         crate::trace::mark("simulated");
         let solve_s = sim.solve_s;
         let history = history_csv(&sim.records);
@@ -314,6 +323,23 @@ pub fn run_model(
         return Err(e);
     }
     Ok(summary)
+}
+
+/// Drops `v` once no solve holds it any more (polled every millisecond).
+fn free_when_unshared<T>(mut v: std::sync::Arc<T>) {
+    loop {
+        match std::sync::Arc::try_unwrap(v) {
+            Ok(inner) => {
+                drop(inner);
+                crate::trace::mark("factor freed");
+                return;
+            }
+            Err(shared) => {
+                v = shared;
+                std::thread::sleep(std::time::Duration::from_millis(1));
+            }
+        }
+    }
 }
 
 /// The progress shown while a run steps: a bar on a terminal, a line per step otherwise.
