@@ -11,29 +11,26 @@ fn main() {
     // Any smooth field will do for timing: x-dependent displacements at the free DOFs.
     let n = model.dofs.n_free();
     let u: Vec<f64> = (0..n).map(|i| 1e-3 * ((i % 977) as f64).sin()).collect();
-    let t = Instant::now();
-    let _m = stickslip::output::fields::BodiesMesh::new(&model);
-    println!("bodies mesh {:.2} ms", t.elapsed().as_secs_f64() * 1e3);
-    let t = Instant::now();
-    let f = model.element_forces(&u);
-    println!(
-        "element forces (parallel, geometry each time) {:.2} ms {}",
-        t.elapsed().as_secs_f64() * 1e3,
-        f.len()
-    );
-    let t = Instant::now();
-    model.keep_force_geometry();
-    println!(
-        "keep force geometry (parallel) {:.2} ms",
-        t.elapsed().as_secs_f64() * 1e3
-    );
-    let t = Instant::now();
-    let f = model.element_forces(&u);
-    println!(
-        "element forces (kept geometry) {:.2} ms {}",
-        t.elapsed().as_secs_f64() * 1e3,
-        f.len()
-    );
+    // One timed call, printed with its label.
+    let timed = |label: &str, f: &mut dyn FnMut() -> String| {
+        let t = Instant::now();
+        let note = f();
+        println!("{label}: {:.2} ms {note}", t.elapsed().as_secs_f64() * 1e3);
+    };
+    timed("bodies mesh", &mut || {
+        stickslip::output::fields::BodiesMesh::new(&model);
+        String::new()
+    });
+    timed("element forces (parallel, geometry each time)", &mut || {
+        format!("({} elements)", model.element_forces(&u).len())
+    });
+    timed("keep force geometry (parallel)", &mut || {
+        model.keep_force_geometry();
+        String::new()
+    });
+    timed("element forces (kept geometry)", &mut || {
+        format!("({} elements)", model.element_forces(&u).len())
+    });
     for parallel in [false, true] {
         let mut best = f64::INFINITY;
         let mut check = 0.0;
