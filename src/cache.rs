@@ -552,6 +552,23 @@ fn header_bytes(key: Key, table: &[SectionInfo]) -> Vec<u8> {
     h
 }
 
+/// Reserves the file's blocks before it is written (Linux: `fallocate`; a hint, whose failure
+/// the writes then report if it matters). The file system then maps each page as it is
+/// written instead of reserving its block one page at a time: the cache writer's CPU for a
+/// 148 MB entry (L5) 42–43 → 32–33 ms, in `STICKSLIP_TRACE`'s `cache entry written` mark.
+pub(crate) fn preallocate(file: &std::fs::File, len: u64) {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::fd::AsRawFd;
+        if let Ok(len) = libc::off_t::try_from(len) {
+            // SAFETY: a valid open descriptor; the call only allocates the file's blocks.
+            let _ = unsafe { libc::fallocate(file.as_raw_fd(), 0, 0, len) };
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = (file, len);
+}
+
 /// Writes `entry` under `key` to `path`, through a temporary file in the same directory.
 fn write_entry(path: &Path, key: Key, entry: &Entry) -> std::io::Result<u64> {
     static SERIAL: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
@@ -566,7 +583,9 @@ fn write_entry(path: &Path, key: Key, entry: &Entry) -> std::io::Result<u64> {
         SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ));
     let result = (|| {
-        let mut f = std::io::BufWriter::with_capacity(CHUNK, std::fs::File::create(&tmp)?);
+        let file = std::fs::File::create(&tmp)?;
+        preallocate(&file, entry.file_len());
+        let mut f = std::io::BufWriter::with_capacity(CHUNK, file);
         // Placeholder header, rewritten once the section hashes are known.
         f.write_all(&vec![0u8; entry.header_len() as usize])?;
         let mut table = Vec::with_capacity(entry.sections.len());

@@ -1,7 +1,7 @@
 //! An opt-in timeline of a run: with `STICKSLIP_TRACE=1`, [`mark`] prints the milliseconds
 //! since the process started (first call of [`start`]), the process's minor page faults so far
-//! (each a page of memory touched for the first time, ≈ 1.2 µs here) and a label to standard
-//! error. Used to
+//! (each a page of memory touched for the first time, ≈ 1.2 µs here), the calling thread's CPU
+//! time so far and a label to standard error. Used to
 //! find where the wall time of a run goes outside the timed phases of `summary.json`.
 
 use std::sync::OnceLock;
@@ -29,8 +29,9 @@ pub fn mark(label: impl std::fmt::Display) {
         let ms = t0.elapsed().as_secs_f64() * 1e3;
         let thread = std::thread::current();
         eprintln!(
-            "trace {ms:9.1} ms {:7} faults [{}] {label}",
+            "trace {ms:9.1} ms {:7} faults {:7.1} ms CPU [{}] {label}",
             minor_faults(),
+            thread_cpu_ms(),
             thread.name().unwrap_or("-")
         );
     }
@@ -48,4 +49,18 @@ fn minor_faults() -> i64 {
         }
     }
     0
+}
+
+/// The calling thread's CPU time so far (user and system), in ms, or NaN where not available.
+fn thread_cpu_ms() -> f64 {
+    #[cfg(target_os = "linux")]
+    {
+        // SAFETY: getrusage writes the struct it is given.
+        let mut r: libc::rusage = unsafe { std::mem::zeroed() };
+        if unsafe { libc::getrusage(libc::RUSAGE_THREAD, &mut r) } == 0 {
+            let ms = |t: libc::timeval| t.tv_sec as f64 * 1e3 + t.tv_usec as f64 * 1e-3;
+            return ms(r.ru_utime) + ms(r.ru_stime);
+        }
+    }
+    f64::NAN
 }
