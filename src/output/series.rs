@@ -262,17 +262,9 @@ impl<'a> Series<'a> {
         Ok(())
     }
 
-    /// Writes `bytes` to `path` atomically (the file it replaces closed by the reaper), the
-    /// error naming the file.
-    fn put(&self, path: &Path, bytes: &[u8]) -> Result<(), RunError> {
-        let tmp =
-            super::write_temporary(path, &[bytes]).map_err(|source| write_error(path, source))?;
-        self.reaper
-            .commit(&tmp, path)
-            .map_err(|source| write_error(path, source))
-    }
-
-    /// Writes one step's files after its bodies dataset (written as `name`).
+    /// Writes one step's files after its bodies dataset (written as `name`): the contact
+    /// dataset and table, the `.pvd` and the restart state, written and synced together, then
+    /// each renamed into place in that order.
     fn write_files(&mut self, s: StepOutput, name: String) -> Result<(), RunError> {
         let (model, stem, step) = (self.bodies.model, self.bodies.stem, s.step);
         let dir = self.bodies.dir;
@@ -282,32 +274,55 @@ impl<'a> Series<'a> {
             part: 0,
             file: name,
         });
+        let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
         if let Some(st) = &s.contact {
             let cname = format!("{stem}_contact_{step:04}.vtu");
-            self.put(&dir.join(&cname), &contact_vtu(model, st, compress))?;
+            files.push((dir.join(&cname), contact_vtu(model, st, compress)));
             self.entries.push(PvdEntry {
                 time: s.time,
                 part: 1,
                 file: cname,
             });
-            self.put(
-                &dir.join(format!("contact_{step:04}.csv")),
-                contact_csv(model, st).as_bytes(),
-            )?;
+            files.push((
+                dir.join(format!("contact_{step:04}.csv")),
+                contact_csv(model, st).into_bytes(),
+            ));
         }
-        self.put(
-            &dir.join(format!("{stem}.pvd")),
-            pvd(&self.entries).as_bytes(),
-        )?;
+        files.push((
+            dir.join(format!("{stem}.pvd")),
+            pvd(&self.entries).into_bytes(),
+        ));
         // The state to resume from, after the step's files.
         if let Some(mut saved) = s.state {
             saved.pvd = self.entries.clone();
-            self.put(
-                &dir.join(restart::state_name(step)),
+            files.push((
+                dir.join(restart::state_name(step)),
                 serde_json::to_string(&saved)
                     .expect("serialisable")
-                    .as_bytes(),
-            )?;
+                    .into_bytes(),
+            ));
+        }
+        self.put_all(&files)
+    }
+
+    /// Writes each `(path, bytes)` of `files` atomically, renamed into place in their order
+    /// once all are written and synced (the files they replace closed by the reaper); the
+    /// error names the file.
+    fn put_all(&self, files: &[(PathBuf, Vec<u8>)]) -> Result<(), RunError> {
+        let parts: Vec<(&Path, &[u8])> = files
+            .iter()
+            .map(|(p, b)| (p.as_path(), b.as_slice()))
+            .collect();
+        let temps = super::write_temporaries(&parts)
+            .map_err(|(i, source)| write_error(&files[i].0, source))?;
+        let mut temps = temps.into_iter().zip(files);
+        while let Some((tmp, (path, _))) = temps.next() {
+            if let Err(source) = self.reaper.commit(&tmp, path) {
+                for (tmp, _) in temps {
+                    let _ = std::fs::remove_file(tmp);
+                }
+                return Err(write_error(path, source));
+            }
         }
         Ok(())
     }
