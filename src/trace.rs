@@ -39,7 +39,7 @@ pub fn mark(label: impl std::fmt::Display) {
 
 /// The process's minor page faults so far (memory touched for the first time), or 0 where the
 /// count is not available.
-fn minor_faults() -> i64 {
+fn minor_faults() -> libc::c_long {
     #[cfg(unix)]
     {
         // SAFETY: getrusage writes the struct it is given.
