@@ -362,6 +362,17 @@ pub fn peak_memory_bytes() -> Option<u64> {
 mod tests {
     use super::*;
 
+    /// The names of the files in `dir`, sorted.
+    fn names_in(dir: &Path) -> Vec<String> {
+        let mut names: Vec<_> = std::fs::read_dir(dir)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        names
+    }
+
     /// A file of several chunks and a ragged end, in parts that straddle the chunks, written
     /// through `O_DIRECT` (a disk-backed temporary directory) and through `/dev/shm` (tmpfs,
     /// which may refuse the flag: the buffered path), reads back byte for byte, and leaves no
@@ -383,12 +394,7 @@ mod tests {
         assert!(reaper.commit(&missing, &old).is_err());
         assert_eq!(std::fs::read(&old).unwrap(), b"new a");
         drop(reaper);
-        let mut names: Vec<_> = std::fs::read_dir(&dir)
-            .unwrap()
-            .flatten()
-            .map(|e| e.file_name().into_string().unwrap())
-            .collect();
-        names.sort();
+        let names = names_in(&dir);
         assert_eq!(names, ["a.vtu", "b.vtu"]);
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -414,12 +420,7 @@ mod tests {
         let c = dir.join("c.csv");
         let err = write_temporaries(&[(&c, b"c"), (&a, b"again"), (&nowhere, b"x")]).unwrap_err();
         assert_eq!(err.0, 2);
-        let mut names: Vec<_> = std::fs::read_dir(&dir)
-            .unwrap()
-            .flatten()
-            .map(|e| e.file_name().into_string().unwrap())
-            .collect();
-        names.sort();
+        let names = names_in(&dir);
         assert_eq!(
             names,
             ["a.csv", "b.vtu"],
