@@ -24,26 +24,12 @@ pub fn write_atomic_parts(path: &Path, parts: &[&[u8]]) -> std::io::Result<()> {
 /// The first half of [`write_atomic_parts`]: writes `parts` to the temporary name of `path`
 /// (in the same directory) and returns it; nothing is left behind on an error.
 pub fn write_temporary(path: &Path, parts: &[&[u8]]) -> std::io::Result<PathBuf> {
-    let tmp = temporary_name(path);
-    let len: usize = parts.iter().map(|p| p.len()).sum();
-    let written = (|| {
-        if len >= DIRECT_FROM && direct::write(&tmp, parts, len)? {
-            return Ok(());
-        }
-        let mut f = std::fs::File::create(&tmp)?;
-        for p in parts {
-            f.write_all(p)?;
-        }
+    let (tmp, file) = write_unsynced(path, parts)?;
+    if let Some(f) = file {
+        // A file system that cannot sync still gets the file.
         f.sync_all().ok();
-        Ok(())
-    })();
-    match written {
-        Ok(()) => Ok(tmp),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
     }
+    Ok(tmp)
 }
 
 /// [`write_temporary`] for several files at once: each written to its temporary name, then all
@@ -54,43 +40,50 @@ pub fn write_temporary(path: &Path, parts: &[&[u8]]) -> std::io::Result<PathBuf>
 pub fn write_temporaries(
     files: &[(&Path, &[u8])],
 ) -> Result<Vec<PathBuf>, (usize, std::io::Error)> {
-    let mut written: Vec<(PathBuf, Option<std::fs::File>)> = Vec::with_capacity(files.len());
-    let remove = |written: &[(PathBuf, Option<std::fs::File>)]| {
-        for (tmp, _) in written {
-            let _ = std::fs::remove_file(tmp);
-        }
-    };
+    let mut written = Vec::with_capacity(files.len());
     for (i, (path, bytes)) in files.iter().enumerate() {
-        let kept = if bytes.len() >= DIRECT_FROM {
-            // Large files go past the page cache as in `write_temporary` (synced there).
-            write_temporary(path, &[bytes]).map(|tmp| (tmp, None))
-        } else {
-            let tmp = temporary_name(path);
-            let created = std::fs::File::create(&tmp).and_then(|mut f| {
-                f.write_all(bytes)?;
-                Ok(f)
-            });
-            match created {
-                Ok(f) => Ok((tmp, Some(f))),
-                Err(e) => {
-                    let _ = std::fs::remove_file(&tmp);
-                    Err(e)
-                }
-            }
-        };
-        match kept {
-            Ok(k) => written.push(k),
+        match write_unsynced(path, &[bytes]) {
+            Ok(w) => written.push(w),
             Err(e) => {
-                remove(&written);
+                for (tmp, _) in &written {
+                    let _ = std::fs::remove_file(tmp);
+                }
                 return Err((i, e));
             }
         }
     }
     for f in written.iter().filter_map(|(_, f)| f.as_ref()) {
-        // As `write_temporary`: a file system that cannot sync still gets the file.
         f.sync_all().ok();
     }
     Ok(written.into_iter().map(|(tmp, _)| tmp).collect())
+}
+
+/// Writes `parts` to the temporary name of `path`: large files past the page cache ([`direct`],
+/// synced there), others through the page cache, whose file is returned still to be synced.
+/// Nothing is left behind on an error.
+fn write_unsynced(
+    path: &Path,
+    parts: &[&[u8]],
+) -> std::io::Result<(PathBuf, Option<std::fs::File>)> {
+    let tmp = temporary_name(path);
+    let len: usize = parts.iter().map(|p| p.len()).sum();
+    let written = (|| {
+        if len >= DIRECT_FROM && direct::write(&tmp, parts, len)? {
+            return Ok(None);
+        }
+        let mut f = std::fs::File::create(&tmp)?;
+        for p in parts {
+            f.write_all(p)?;
+        }
+        Ok(Some(f))
+    })();
+    match written {
+        Ok(f) => Ok((tmp, f)),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
 }
 
 /// The temporary name of `path` in its directory (this process's).
