@@ -1177,15 +1177,27 @@ impl SaddleFactor {
         }
         // One array holds both operands of W = −B Lᵀ: B = L D in its lower half (D on the
         // diagonal) and Lᵀ in its strict upper half, which the product reads as unit upper
-        // triangular (a copy of L for B would cost another m × m array: 130 MB at L7).
-        for j in 0..m {
-            let d = l[(j, j)];
-            for i in j + 1..m {
-                let v = l[(i, j)];
-                l[(j, i)] = v;
-                l[(i, j)] = v * d;
+        // triangular (a copy of L for B would cost another m × m array: 130 MB at L7). In
+        // tiles, so that the transposed writes stay in cache, the column blocks on rayon's
+        // threads: 3.6 → 1 ms on L5, where the loop by columns ran on one thread.
+        const TILE: usize = 64;
+        let ls = SharedMat::of(&mut l);
+        for_blocks(m, TILE, |jb| {
+            for ib in (jb..m).step_by(TILE) {
+                for j in jb..(jb + TILE).min(m) {
+                    // SAFETY: this task alone reads and writes the columns jb.. below the
+                    // diagonal and the rows jb.. above it; no task writes the diagonal.
+                    let d = unsafe { ls.get(j, j) };
+                    for i in (j + 1).max(ib)..(ib + TILE).min(m) {
+                        unsafe {
+                            let v = ls.get(i, j);
+                            ls.set(j, i, v);
+                            ls.set(i, j, v * d);
+                        }
+                    }
+                }
             }
-        }
+        });
         crate::trace::mark("delassus: L D");
         let mut w = zeros_in_parallel(m, m);
         matmul(
@@ -1203,7 +1215,6 @@ impl SaddleFactor {
         // The upper half from the lower, in tiles (so that the transposed writes stay in
         // cache: 130 MB at L7), the row blocks of the upper half on rayon's threads (each
         // writes its own rows above the diagonal and reads below it).
-        const TILE: usize = 64;
         let ws = SharedMat::of(&mut w);
         for_blocks(m, TILE, |jb| {
             for ib in (jb..m).step_by(TILE) {

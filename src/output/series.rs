@@ -8,8 +8,9 @@
 //! depend on it. When it falls behind it takes the queued steps together (up to [`BATCH`]):
 //! their displacement fields come from one block solve (which reads the factor once for all,
 //! and gives each field bit for bit). Once the driver has solved its last step it prepares the
-//! later half of the steps still waiting on its own thread ([`Background::help`]) and hands
-//! them back, and the writer puts them in place in their turn. Each array goes to the file
+//! later half of the steps still waiting on its own thread ([`Background::help`]; on all
+//! threads when the writer has caught up) and hands them back, and the writer puts them in
+//! place in their turn. Each array goes to the file
 //! from its own memory. Its first error stops it; the driver sees that error at its next step,
 //! and stops.
 
@@ -344,6 +345,8 @@ struct Queue {
     next_id: u64,
     /// No more steps will come.
     closed: bool,
+    /// The writer is preparing steps (recovering their fields, computing their stresses).
+    preparing: bool,
     /// The writer stopped on an error: nothing more is written.
     stopped: bool,
 }
@@ -455,7 +458,9 @@ impl<'scope, 'env> Background<'scope, 'env> {
 
     /// No more steps will come: prepares the steps still waiting in the queue on this
     /// thread, from the last (the writer takes them from the first), and hands them back to
-    /// the writer, which puts them in place in their turn. A step whose field it asked for
+    /// the writer, which puts them in place in their turn. When the writer is not preparing
+    /// steps of its own, they are prepared on all threads (on L7 the writer has caught up
+    /// when the last step comes, and its core would idle). A step whose field it asked for
     /// (the last) has it once this returns, whichever thread prepared it. Returns the number
     /// of steps this thread prepared.
     pub fn help(&mut self) -> usize {
@@ -470,7 +475,7 @@ impl<'scope, 'env> Background<'scope, 'env> {
             // The last run of steps waiting in the queue (those after it, if any, are taken
             // already): the later half of it, up to a batch, in place of which goes a
             // marker. The writer, busy with the steps before them, takes the earlier half.
-            let (id, steps) = {
+            let (id, steps, spread) = {
                 let mut q = shared.lock();
                 if q.stopped {
                     return prepared_here;
@@ -500,12 +505,15 @@ impl<'scope, 'env> Background<'scope, 'env> {
                     })
                     .collect();
                 q.items.insert(end - take, Item::Taken(id));
-                (id, steps)
+                // With the writer not preparing steps of its own (it has caught up, as on L7,
+                // or only puts files in place), its core is free: these steps are prepared on
+                // all threads.
+                (id, steps, !q.preparing)
             };
             prepared_here += steps.len();
             let bodies = &self.bodies;
             let prepared = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                bodies.prepare(steps, false)
+                bodies.prepare(steps, spread)
             })) {
                 Ok(p) => p,
                 Err(panic) => {
@@ -598,10 +606,13 @@ fn writer_loop(shared: &Shared, series: &mut Series<'_>) -> Result<(), RunError>
                         batch.push(*s);
                     }
                 }
+                q.preparing = true;
                 shared.changed.notify_all();
                 drop(q);
                 let spread = batch.iter().any(|s| s.reply.is_some());
-                series.bodies.prepare(batch, spread)
+                let prepared = series.bodies.prepare(batch, spread);
+                shared.lock().preparing = false;
+                prepared
             }
         };
         series.commit(prepared)?;
