@@ -919,13 +919,21 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
-/// Asks for the cache lines of `v` (a hint: no effect on results).
+/// Asks for the cache lines of `v`, to be read once (a hint: no effect on results).
+///
+/// Non-temporal (`NTA`): the recovery sweeps stream the factor's 132 MB (L5) through the
+/// caches while the contact Newton, on the other core, works on a Delassus operator and block
+/// factor of a few MB that otherwise lose their place in the shared L3 to it. With `T0`
+/// against `NTA` (a switch in a build not kept, the same binary in alternating runs of
+/// `benches/ab.sh`, Fig. 2 on L5): wall − floor 0.282 → 0.266 s (`cold`, 14 pairs) and 0.311
+/// → 0.294 s (`first`, 16 pairs); the sweep alone unchanged (`examples/recovery_timing`,
+/// 18–20 ms for one column either way); L7 `cold` 1.427 against 1.422 (4 pairs).
 fn prefetch(v: &[f64]) {
     #[cfg(target_arch = "x86_64")]
     for line in v.chunks(8) {
         // SAFETY: a prefetch reads nothing and cannot fault; the address is in `v`.
         unsafe {
-            std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
+            std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_NTA }>(
                 line.as_ptr().cast(),
             )
         };
