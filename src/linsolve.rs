@@ -930,7 +930,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// 18–20 ms for one column either way); L7 `cold` 1.427 against 1.422 (4 pairs).
 fn prefetch(v: &[f64]) {
     #[cfg(target_arch = "x86_64")]
-    for line in v.chunks(8) {
+    for line in v.chunks(8).rev() {
         // SAFETY: a prefetch reads nothing and cannot fault; the address is in `v`.
         unsafe {
             std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_NTA }>(
@@ -990,6 +990,7 @@ fn sweep_leading(nodes: &[(usize, usize, usize, Node<'_>)], x: &mut [f64], size:
     // the one being solved.
     const PREFETCH_BYTES: usize = 8 << 10;
     let (mut ahead, mut fetched) = (nodes.len(), 0usize);
+    let mut below = Vec::new();
     for (i, (start, wk, kp, node)) in nodes.iter().enumerate().rev() {
         let (pat, w) = (&node.pattern[..*kp], node.ncols);
         let bytes = |(_, wk, _, node): &(usize, usize, usize, Node<'_>)| wk * node.nrows * 8;
@@ -1007,13 +1008,17 @@ fn sweep_leading(nodes: &[(usize, usize, usize, Node<'_>)], x: &mut [f64], size:
         for x in x.chunks_exact_mut(size) {
             t.clear();
             t.extend(pat.iter().map(|&row| x[row]));
+            // The sums over the pattern rows first, from the first column (the supernode's
+            // memory in order), then the diagonal block's, which depend on the columns after.
+            below.clear();
+            below.extend((0..*wk).map(|c| dot(&node.col(c)[w..w + kp], &t)));
             for c in (0..*wk).rev() {
                 let col = node.col(c);
                 // Both sums as (vectorised) dot products: the one over the diagonal block
                 // was a chain of dependent scalar updates, most of the sweep's time.
                 let mut acc = x[start + c] / col[c];
                 acc -= dot(&col[c + 1..*wk], &x[start + c + 1..start + wk]);
-                acc -= dot(&col[w..w + kp], &t);
+                acc -= below[c];
                 x[start + c] = acc;
             }
         }

@@ -119,6 +119,7 @@ pub(crate) fn final_checks(
     last_scale: f64,
     records: &[StepRecord],
     friction: Option<&FrictionSummary>,
+    equilibrium: Option<crate::checks::Check>,
 ) -> Vec<crate::checks::Check> {
     let u = match (last_u, last_state) {
         (Some(u), _) => u,
@@ -132,6 +133,7 @@ pub(crate) fn final_checks(
         state: last_state,
         records,
         friction,
+        equilibrium,
     })
 }
 
@@ -401,6 +403,7 @@ pub fn summarise(
         last_u,
         last_state,
         last_scale,
+        equilibrium,
         ..
     } = sim;
     let q_max = records
@@ -421,6 +424,7 @@ pub fn summarise(
         last_scale,
         &records,
         friction.as_ref(),
+        equilibrium,
     );
     let (failure, status) = judge(failure, lost_equilibrium, friction.as_ref(), &checks);
     let status = match (&failure, lost_equilibrium) {

@@ -260,15 +260,45 @@ pub fn run_model(
             writer.send(w)?;
         }
         // The steps still waiting for the writer: this thread prepares them from the last
-        // while the writer finishes those it has; then the summary and its checks.
-        let _ = writer.help();
+        // while the writer finishes those it has; then the summary and its checks. The
+        // summary's equilibrium check of the last step starts as soon as its field is
+        // recovered, on a thread of its own: it fills the time the two output threads wait
+        // for the device's writes and for each other at the end, instead of following them.
         let mut sim = sim;
-        if let Some((step, rx)) = last_u
-            && sim.last_u.is_none()
-            && sim.records.len() == step
-        {
-            // None when the writer stopped on an error first (reported by `finish` below).
-            sim.last_u = rx.recv().ok();
+        match last_u {
+            Some((step, rx)) if sim.last_u.is_none() && sim.records.len() == step => {
+                let (sim_ref, model_ref) = (&sim, &model);
+                let (u, equilibrium) = std::thread::scope(|s| {
+                    let checking = std::thread::Builder::new()
+                        .name("stickslip-check".into())
+                        .spawn_scoped(s, move || {
+                            // None when the writer stopped on an error first (reported by
+                            // `finish` below).
+                            let u = rx.recv().ok()?;
+                            let e = crate::checks::equilibrium(&crate::checks::Input {
+                                model: model_ref,
+                                u: &u,
+                                scale: sim_ref.last_scale,
+                                state: sim_ref.last_state.as_ref(),
+                                records: &sim_ref.records,
+                                friction: None,
+                                equilibrium: None,
+                            });
+                            Some((u, e))
+                        })
+                        .expect("the check thread starts");
+                    let _ = writer.help();
+                    checking
+                        .join()
+                        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+                        .unzip()
+                });
+                sim.last_u = u;
+                sim.equilibrium = equilibrium;
+            }
+            _ => {
+                let _ = writer.help();
+            }
         }
         // Every field is recovered, or its recovery has started (the writer took the steps
         // left): the factor's values are freed once those end, on a thread of their own, while

@@ -67,6 +67,9 @@ pub struct Simulation {
     pub last_u: Option<Vec<f64>>,
     pub last_state: Option<State>,
     pub last_scale: f64,
+    /// The summary's equilibrium check of the last step, when the caller computed it already
+    /// (a run computes it while its last steps are written).
+    pub equilibrium: Option<crate::checks::Check>,
 }
 
 /// Steps through the stages of a case on a built model with friction law `law` (overriding
@@ -180,6 +183,7 @@ pub fn simulate_with(
         last_state: if d.records.is_empty() { None } else { d.cstate },
         last_scale: d.scale,
         records: d.records,
+        equilibrium: None,
     })
 }
 

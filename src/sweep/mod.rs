@@ -395,6 +395,7 @@ fn row_of(
                 sim.last_scale,
                 &sim.records,
                 friction.as_ref(),
+                sim.equilibrium.take(),
             );
             let (_, status) = judge(
                 sim.failure,
