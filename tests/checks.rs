@@ -276,3 +276,33 @@ fn a_local_peak_below_fd_p_is_not_called_gross_sliding() {
     let q = s["friction"]["q_max"].as_f64().unwrap();
     assert!((q - 0.543814).abs() < 1e-5, "Q_max {q}");
 }
+
+/// The summary's checks do not depend on where the last step's field came from: with `.vtu`
+/// output the equilibrium check runs on a thread of its own on the field the writer recovers,
+/// without output the summary recovers the field itself. Both give the same checks, bit for
+/// bit (the same field, the same sums).
+#[test]
+fn checks_are_the_same_with_and_without_output() {
+    let (dir_with, dir_without) = (tempdir("checks-output-on"), tempdir("checks-output-off"));
+    let mut case = shipped_case_on("vm272_cm.json", "vm272_L1.msh");
+    let with = run_case_in(&dir_with, "case.json", &case.to_string(), &["--quiet"]);
+    assert_eq!(with.code, 0, "{}", with.stderr);
+    let series = std::fs::read_dir(&with.out)
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .path()
+                .extension()
+                .is_some_and(|x| x == "vtu")
+        })
+        .count();
+    assert!(series > 0, "the run with output wrote its steps");
+    case["output"]["vtu"] = json!(false);
+    let without = run_case_in(&dir_without, "case.json", &case.to_string(), &["--quiet"]);
+    assert_eq!(without.code, 0, "{}", without.stderr);
+    let (a, b) = (summary(&with.out), summary(&without.out));
+    assert_eq!(a["checks"], b["checks"]);
+    let eq = check(&a, "equilibrium")["value"].as_f64().unwrap();
+    assert!(eq > 0.0 && eq < 3e-13, "equilibrium residual {eq}");
+}
