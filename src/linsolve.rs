@@ -1303,12 +1303,18 @@ mod tests {
         (col_ptr, row_idx, values, y)
     }
 
-    #[test]
-    fn a_released_factor_hands_over_its_values_once_and_solves_no_more() {
-        let n = 12;
+    /// The factor of [`small_saddle`] of order `n`, with its constraint rows.
+    fn small_saddle_factor(n: usize) -> (SaddleFactor, Rows) {
         let (cp, ri, kv, y) = small_saddle(n);
         let sym = SaddleSymbolic::analyse(n, &cp, &ri, &y).unwrap();
         let f = sym.factorise(&kv, &y).unwrap();
+        (f, y)
+    }
+
+    #[test]
+    fn a_released_factor_hands_over_its_values_once_and_solves_no_more() {
+        let n = 12;
+        let (f, _) = small_saddle_factor(n);
         let mut x = vec![1.0; n];
         f.solve_in_place(&mut x);
         // A solve that holds the values keeps them alive past the release.
@@ -1379,9 +1385,7 @@ mod tests {
     #[test]
     fn the_layout_solves_like_the_matrix_and_its_check_refuses_broken_ones() {
         let n = 40;
-        let (cp, ri, kv, y) = small_saddle(n);
-        let sym = SaddleSymbolic::analyse(n, &cp, &ri, &y).unwrap();
-        let f = sym.factorise(&kv, &y).unwrap();
+        let (f, y) = small_saddle_factor(n);
         let layout = f.layout();
         assert_eq!(layout.check(n, y.len()), Ok(()));
         // K̂ x = b through the layout, against the tridiagonal product.

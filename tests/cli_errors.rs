@@ -141,6 +141,57 @@ fn write_error_stops_the_run_with_the_earlier_steps_kept() {
     assert!(out.join("case_0003.vtu").is_dir());
 }
 
+/// The same at the end of the run, where the summary's equilibrium check waits on a thread of
+/// its own for the last step's field: a write that fails at the step before the last (the last
+/// is then never prepared) or at the last (its field was recovered first) stops the run with
+/// exit status 4 naming the file, the earlier steps whole, no summary or history, and nothing
+/// temporary left.
+#[test]
+fn write_error_at_the_last_steps_stops_the_run() {
+    let v = shipped_case_on("vm272_cm.json", "vm272_L1.msh");
+    for blocked in [10, 11] {
+        let dir = tempdir(&format!("write-error-last-{blocked}"));
+        let case = dir.join("case.json");
+        std::fs::write(&case, serde_json::to_string(&v).unwrap()).unwrap();
+        let out = dir.join("out");
+        let name = format!("case_{blocked:04}.vtu");
+        std::fs::create_dir_all(out.join(&name)).unwrap();
+        let (code, _, err) = stickslip(&[
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert_eq!(code, 4, "{err}");
+        assert!(
+            err.contains(&name) && err.contains("cannot write output"),
+            "{err}"
+        );
+        let names = file_names(&out);
+        for step in 1..blocked {
+            for f in [
+                format!("case_{step:04}.vtu"),
+                format!("state_{step:04}.json"),
+            ] {
+                assert!(names.contains(&f), "{f} missing: {names:?}");
+            }
+        }
+        for absent in [
+            format!("state_{blocked:04}.json"),
+            "case_0012.vtu".to_string(),
+            "summary.json".into(),
+            "history.csv".into(),
+        ] {
+            assert!(!names.contains(&absent), "{absent} written: {names:?}");
+        }
+        assert!(
+            !names.iter().any(|n| n.contains(".tmp")),
+            "temporary files left: {names:?}"
+        );
+    }
+}
+
 #[test]
 fn unknown_key_is_named_with_its_line() {
     let case = GOOD_CASE.replace("\"steps\": 2", "\"steps\": 2, \"stpes\": 3");
