@@ -97,18 +97,17 @@ fn good_case_runs_and_writes_everything() {
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
 
-/// A step whose file cannot be written (a directory in its place) stops the run with exit
-/// status 4 and a message naming the file, although the steps are written on a thread of
-/// their own while the next ones are solved: the files of the steps before it, each whole,
-/// and nothing of it or after it (no later step, state, history or summary).
-#[test]
-fn write_error_stops_the_run_with_the_earlier_steps_kept() {
-    let dir = tempdir("write-error");
+/// Runs `cases/vm272_cm.json` on L1 (eleven steps, each written) into a fresh directory in
+/// which a directory stands where step `blocked`'s `.vtu` goes; asserts exit status 4 and a
+/// message naming that file, and returns the output directory.
+fn run_with_step_file_blocked(label: &str, blocked: usize) -> PathBuf {
+    let dir = tempdir(label);
     let case = dir.join("case.json");
     let v = shipped_case_on("vm272_cm.json", "vm272_L1.msh");
     std::fs::write(&case, serde_json::to_string(&v).unwrap()).unwrap();
     let out = dir.join("out");
-    std::fs::create_dir_all(out.join("case_0003.vtu")).unwrap();
+    let name = format!("case_{blocked:04}.vtu");
+    std::fs::create_dir_all(out.join(&name)).unwrap();
     let (code, _, err) = stickslip(&[
         "run",
         case.to_str().unwrap(),
@@ -118,9 +117,19 @@ fn write_error_stops_the_run_with_the_earlier_steps_kept() {
     ]);
     assert_eq!(code, 4, "{err}");
     assert!(
-        err.contains("case_0003.vtu") && err.contains("cannot write output"),
+        err.contains(&name) && err.contains("cannot write output"),
         "{err}"
     );
+    out
+}
+
+/// A step whose file cannot be written (a directory in its place) stops the run with exit
+/// status 4 and a message naming the file, although the steps are written on a thread of
+/// their own while the next ones are solved: the files of the steps before it, each whole,
+/// and nothing of it or after it (no later step, state, history or summary).
+#[test]
+fn write_error_stops_the_run_with_the_earlier_steps_kept() {
+    let out = run_with_step_file_blocked("write-error", 3);
     assert_eq!(
         file_names(&out),
         [
@@ -148,26 +157,8 @@ fn write_error_stops_the_run_with_the_earlier_steps_kept() {
 /// temporary left.
 #[test]
 fn write_error_at_the_last_steps_stops_the_run() {
-    let v = shipped_case_on("vm272_cm.json", "vm272_L1.msh");
     for blocked in [10, 11] {
-        let dir = tempdir(&format!("write-error-last-{blocked}"));
-        let case = dir.join("case.json");
-        std::fs::write(&case, serde_json::to_string(&v).unwrap()).unwrap();
-        let out = dir.join("out");
-        let name = format!("case_{blocked:04}.vtu");
-        std::fs::create_dir_all(out.join(&name)).unwrap();
-        let (code, _, err) = stickslip(&[
-            "run",
-            case.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ]);
-        assert_eq!(code, 4, "{err}");
-        assert!(
-            err.contains(&name) && err.contains("cannot write output"),
-            "{err}"
-        );
+        let out = run_with_step_file_blocked(&format!("write-error-last-{blocked}"), blocked);
         let names = file_names(&out);
         for step in 1..blocked {
             for f in [
