@@ -12,13 +12,21 @@
 //!   magic "stkslpMC" (8 bytes) | format u32 | sections u32 | key (2 × u64)
 //!   per section: tag u32 | kind u32 (1 integer, 2 float) | words u64 | XXH64 of its bytes u64
 //!   XXH64 of all the header bytes above (u64)
+//!   zero bytes up to HEADER_AREA (4096)
 //!   the sections' words, in the order of the table
 //! ```
 //! The header hash covers the section hashes, so it checks the whole file. A file that is
 //! shorter or longer than its table says, whose magic, format, key or any hash does not match,
-//! is reported, deleted and rebuilt, never used. Entries are written to a temporary name and
-//! renamed into place (no `fsync`: after a crash a file may be incomplete, which the checks
-//! catch).
+//! or whose padding is not zero, is reported, deleted and rebuilt, never used. Entries are
+//! written to a temporary name and renamed into place (no `fsync`: after a crash a file may be
+//! incomplete, which the checks catch).
+//!
+//! The first section starts at a fixed offset so that it can be written before the others
+//! are known: a contact model's factor values are computed by the numeric factorisation in a
+//! shared mapping of the new entry's file ([`Draft`]), and the entry's writer then only hashes
+//! them, instead of copying hundreds of MB into the page cache (on Linux, where the file's
+//! blocks can be reserved first; elsewhere, or without room, they are computed in memory and
+//! written as before).
 //!
 //! # Place and size
 //!
@@ -33,7 +41,7 @@ use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 /// Version of the file format and of the meaning of the sections. Bump it when either changes.
-pub const FORMAT: u32 = 3;
+pub const FORMAT: u32 = 4;
 const MAGIC: [u8; 8] = *b"stkslpMC";
 /// Default size cap of the cache directory.
 pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
@@ -41,6 +49,9 @@ pub const DEFAULT_MAX_BYTES: u64 = 4 << 30;
 const MAX_SECTIONS: usize = 64;
 /// Bytes read or written per chunk.
 const CHUNK: usize = 1 << 20;
+/// Bytes before the first section: the header, then zeros.
+pub const HEADER_AREA: u64 = 4096;
+const _: () = assert!(32 + 24 * MAX_SECTIONS as u64 + 8 <= HEADER_AREA);
 
 // ------------------------------------------------------------------------------------------
 // XXH64
@@ -315,9 +326,6 @@ pub enum Words {
     F64(Vec<f64>),
     /// Floats shared with the model (the factor values, written while the run goes on).
     Shared(crate::linsolve::SharedValues),
-    /// The ranges `(start, len)` of floats shared with the model, one after the other (the
-    /// leading block of a saddle factor, [`crate::linsolve::Supernodes::leading`]).
-    Gathered(crate::linsolve::SharedValues, Vec<(usize, usize)>),
     /// Columns `(j, from)` of a dense matrix shared with the model, each from row `from` on,
     /// one after the other (the Delassus operator and its Cholesky factor: 130 and 65 MB at
     /// L7, which a copy would add to the run's peak memory).
@@ -385,7 +393,6 @@ impl Words {
             Words::Usize(v) => v.len(),
             Words::F64(v) => v.len(),
             Words::Shared(v) => v.len(),
-            Words::Gathered(_, r) => r.iter().map(|&(_, len)| len).sum(),
             Words::Columns(m, c) => c.iter().map(|&(_, from)| m.rows() - from).sum(),
         }
     }
@@ -397,7 +404,7 @@ impl Words {
     fn kind(&self) -> u32 {
         match self {
             Words::U64(_) | Words::Usize(_) => 1,
-            Words::F64(_) | Words::Shared(_) | Words::Gathered(..) | Words::Columns(..) => 2,
+            Words::F64(_) | Words::Shared(_) | Words::Columns(..) => 2,
         }
     }
 
@@ -415,11 +422,6 @@ impl Words {
                 Words::Usize(v) => bytemuck::cast_slice(v),
                 Words::F64(v) => bytemuck::cast_slice(v),
                 Words::Shared(v) => bytemuck::cast_slice(&v[..]),
-                // Short pieces (a column each): gathered a chunk at a time.
-                Words::Gathered(v, ranges) => {
-                    let pieces = ranges.iter().map(|&(a, len)| &v[a..a + len]);
-                    return in_chunks(pieces, 1024, f);
-                }
                 Words::Columns(m, cols) => {
                     let pieces = cols.iter().map(|&(j, from)| m.column(j, from));
                     return in_chunks(pieces, m.rows(), f);
@@ -461,7 +463,7 @@ impl Words {
             Words::Usize(v) => chunks!(v, |x: usize| x as u64),
             Words::F64(v) => chunks!(v, |x: f64| x),
             Words::Shared(v) => chunks!(&v[..], |x: f64| x),
-            Words::Gathered(..) | Words::Columns(..) => {
+            Words::Columns(..) => {
                 chunks!(self.gathered().expect("gathered words"), |x: f64| x)
             }
         }
@@ -482,20 +484,14 @@ impl Words {
         match self {
             Words::F64(v) => Some(v),
             Words::Shared(v) => Some(v.to_vec()),
-            Words::Gathered(..) | Words::Columns(..) => self.gathered(),
+            Words::Columns(..) => self.gathered(),
             _ => None,
         }
     }
 
-    /// The floats of [`Words::Gathered`], one range after the other.
+    /// The floats of [`Words::Columns`], one column after the other.
     fn gathered(&self) -> Option<Vec<f64>> {
         match self {
-            Words::Gathered(v, ranges) => Some(
-                ranges
-                    .iter()
-                    .flat_map(|&(a, len)| v[a..a + len].iter().copied())
-                    .collect(),
-            ),
             Words::Columns(m, cols) => Some(
                 cols.iter()
                     .flat_map(|&(j, from)| m.column(j, from).iter().copied())
@@ -509,21 +505,144 @@ impl Words {
 /// A cache entry: tagged sections, written and read in this order.
 pub struct Entry {
     pub sections: Vec<(u32, Words)>,
+    /// The entry's temporary file when its first section is already in it (the factor values
+    /// computed in place, [`Draft`]): the writer hashes that section and writes the others.
+    pub draft: Option<DraftFile>,
 }
 
 impl Entry {
-    fn header_len(&self) -> u64 {
-        32 + 24 * self.sections.len() as u64 + 8
-    }
-
     /// Size of the entry's file in bytes.
     pub fn file_len(&self) -> u64 {
-        self.header_len()
+        HEADER_AREA
             + self
                 .sections
                 .iter()
                 .map(|(_, w)| 8 * w.len() as u64)
                 .sum::<u64>()
+    }
+}
+
+/// The words of a file section mapped for writing: a new entry's factor values, which the
+/// numeric factorisation computes in place.
+pub struct WritableSection {
+    map: memmap2::MmapMut,
+    /// Byte offset of the section in the mapping (a multiple of 8).
+    offset: usize,
+    /// Number of floats.
+    len: usize,
+}
+
+impl WritableSection {
+    /// Number of floats.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The floats, to be written.
+    pub fn as_mut_f64(&mut self) -> &mut [f64] {
+        let b = &mut self.map[self.offset..self.offset + 8 * self.len];
+        assert!(
+            cfg!(target_endian = "little") && (b.as_ptr() as usize).is_multiple_of(8),
+            "mapped floats must be aligned little-endian words"
+        );
+        // SAFETY: aligned, in bounds, little-endian f64 words (checked above); any bit pattern
+        // is a valid f64; the mapping lives as long as `self`, borrowed mutably here.
+        unsafe { std::slice::from_raw_parts_mut(b.as_mut_ptr().cast::<f64>(), self.len) }
+    }
+
+    /// The section, written, as words that stay mapped (and are only read from here on).
+    pub fn into_mapped(self) -> MappedWords {
+        MappedWords {
+            map: Pages::Written(self.map),
+            offset: self.offset,
+            len: self.len,
+        }
+    }
+}
+
+/// The temporary file of a new entry, removed when dropped unless [`write_entry`] renamed it
+/// into place.
+pub struct DraftFile {
+    file: std::fs::File,
+    tmp: PathBuf,
+    /// Floats in its first section, already written.
+    first_len: usize,
+}
+
+impl Drop for DraftFile {
+    fn drop(&mut self) {
+        if !self.tmp.as_os_str().is_empty() {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// A new entry's temporary file, created before the numeric factorisation with room for
+/// `len` floats of factor values as its first section, mapped for writing: the factorisation
+/// computes the values in the file's own pages, and the entry's writer only hashes them.
+pub struct Draft {
+    pub file: DraftFile,
+    pub values: WritableSection,
+}
+
+/// Whether new entries' factor values may be computed in their file ([`Draft`]); set
+/// `STICKSLIP_CACHE_IN_PLACE=0` to compute them in memory and write them afterwards (the
+/// same bytes; a diagnostic for file systems where shared mappings misbehave).
+fn in_place_allowed() -> bool {
+    std::env::var("STICKSLIP_CACHE_IN_PLACE").map_or(true, |v| v != "0")
+}
+
+impl Draft {
+    /// The draft of the entry under `key`, or `None` (nothing left behind) where the values
+    /// cannot be computed in place: not on Linux or not little-endian, the cache directory
+    /// cannot be written, the file system cannot reserve the blocks first (writing to a
+    /// mapped page without a block would kill the process), or the values alone exceed the
+    /// cache's cap.
+    pub fn create(store: &Store, key: Key, len: usize) -> Option<Draft> {
+        let bytes = HEADER_AREA.checked_add(8 * len as u64)?;
+        if !cfg!(all(target_os = "linux", target_endian = "little"))
+            || !in_place_allowed()
+            || bytes > store.max_bytes
+        {
+            return None;
+        }
+        std::fs::create_dir_all(&store.dir).ok()?;
+        let tmp = temporary_path(&store.path(key));
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+            .ok()?;
+        // Removes the file from here on if anything fails.
+        let draft_file = DraftFile {
+            file,
+            tmp,
+            first_len: len,
+        };
+        if !reserve(&draft_file.file, bytes) {
+            return None;
+        }
+        // SAFETY: a file this process just created under a name of its own; see
+        // `Reader::map_next` on files changed by other programs while mapped.
+        let map = unsafe {
+            memmap2::MmapOptions::new()
+                .len(usize::try_from(bytes).ok()?)
+                .map_mut(&draft_file.file)
+        }
+        .ok()?;
+        Some(Draft {
+            file: draft_file,
+            values: WritableSection {
+                map,
+                offset: HEADER_AREA as usize,
+                len,
+            },
+        })
     }
 }
 
@@ -557,62 +676,104 @@ fn header_bytes(key: Key, table: &[SectionInfo]) -> Vec<u8> {
 /// written instead of reserving its block one page at a time: the cache writer's CPU for a
 /// 148 MB entry (L5) 42–43 → 32–33 ms, in `STICKSLIP_TRACE`'s `cache entry written` mark.
 pub(crate) fn preallocate(file: &std::fs::File, len: u64) {
+    let _ = reserve(file, len);
+}
+
+/// Reserves the first `len` bytes of `file`'s blocks and makes it that long (zeros):
+/// `true` if the file system did both, so that writes there through a mapping cannot fail
+/// for want of space.
+fn reserve(file: &std::fs::File, len: u64) -> bool {
     #[cfg(target_os = "linux")]
     {
         use std::os::fd::AsRawFd;
-        if let Ok(len) = libc::off_t::try_from(len) {
-            // SAFETY: a valid open descriptor; the call only allocates the file's blocks.
-            let _ = unsafe { libc::fallocate(file.as_raw_fd(), 0, 0, len) };
-        }
+        let Ok(len) = libc::off_t::try_from(len) else {
+            return false;
+        };
+        // SAFETY: a valid open descriptor; the call only allocates the file's blocks (and,
+        // with mode 0, extends the file to `len`).
+        unsafe { libc::fallocate(file.as_raw_fd(), 0, 0, len) == 0 }
     }
     #[cfg(not(target_os = "linux"))]
-    let _ = (file, len);
+    {
+        let _ = (file, len);
+        false
+    }
 }
 
-/// Writes `entry` under `key` to `path`, through a temporary file in the same directory.
-fn write_entry(path: &Path, key: Key, entry: &Entry) -> std::io::Result<u64> {
+/// A temporary name for the entry `path` in its directory, unique in this process.
+fn temporary_path(path: &Path) -> PathBuf {
     static SERIAL: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     let dir = path.parent().unwrap_or(Path::new("."));
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
-    let tmp = dir.join(format!(
+    dir.join(format!(
         ".{name}.tmp{}-{}",
         std::process::id(),
         SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
-    ));
-    let result = (|| {
-        let file = std::fs::File::create(&tmp)?;
-        preallocate(&file, entry.file_len());
-        let mut f = std::io::BufWriter::with_capacity(CHUNK, file);
-        // Placeholder header, rewritten once the section hashes are known.
-        f.write_all(&vec![0u8; entry.header_len() as usize])?;
-        let mut table = Vec::with_capacity(entry.sections.len());
-        for (tag, words) in &entry.sections {
-            let mut h = Xxh64::new(0);
+    ))
+}
+
+/// Writes `entry` under `key` to `path`, through a temporary file in the same directory (the
+/// entry's draft, whose first section is already written, if it has one).
+fn write_entry(path: &Path, key: Key, mut entry: Entry) -> std::io::Result<u64> {
+    let len = entry.file_len();
+    let mut draft = match entry.draft.take() {
+        Some(d) => d,
+        None => {
+            let tmp = temporary_path(path);
+            let file = std::fs::File::create(&tmp)?;
+            let d = DraftFile {
+                file,
+                tmp,
+                first_len: 0,
+            };
+            preallocate(&d.file, len);
+            d
+        }
+    };
+    let prewritten = draft.first_len;
+    if let Some((_, w)) = entry.sections.first()
+        && prewritten > 0
+        && w.len() != prewritten
+    {
+        return Err(std::io::Error::other(
+            "the entry's first section does not match its draft",
+        ));
+    }
+    let mut f = std::io::BufWriter::with_capacity(CHUNK, &draft.file);
+    f.seek(SeekFrom::Start(HEADER_AREA + 8 * prewritten as u64))?;
+    let mut table = Vec::with_capacity(entry.sections.len());
+    for (i, (tag, words)) in entry.sections.iter().enumerate() {
+        let mut h = Xxh64::new(0);
+        if i == 0 && prewritten > 0 {
+            words.for_each_chunk(|b| {
+                h.update(b);
+                Ok(())
+            })?;
+        } else {
             words.for_each_chunk(|b| {
                 h.update(b);
                 f.write_all(b)
             })?;
-            table.push(SectionInfo {
-                tag: *tag,
-                kind: words.kind(),
-                words: words.len() as u64,
-                hash: h.finish(),
-            });
         }
-        let mut f = f.into_inner().map_err(|e| e.into_error())?;
-        f.seek(SeekFrom::Start(0))?;
-        f.write_all(&header_bytes(key, &table))?;
-        drop(f);
-        std::fs::rename(&tmp, path)?;
-        Ok(entry.file_len())
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+        table.push(SectionInfo {
+            tag: *tag,
+            kind: words.kind(),
+            words: words.len() as u64,
+            hash: h.finish(),
+        });
     }
-    result
+    let mut f = f.into_inner().map_err(|e| e.into_error())?;
+    f.seek(SeekFrom::Start(0))?;
+    f.write_all(&header_bytes(key, &table))?;
+    // A draft's reserved blocks cover its first section only; a file written here is as
+    // long as its last write.
+    draft.file.set_len(len)?;
+    std::fs::rename(&draft.tmp, path)?;
+    draft.tmp = PathBuf::new();
+    Ok(len)
 }
 
 /// An entry opened for reading: its header checked, its sections read one after the other
@@ -645,7 +806,7 @@ impl Reader {
         };
         match Self::header(&mut file, key) {
             Ok((table, bytes)) => Open::Ready(Reader {
-                pos: 32 + 24 * table.len() as u64 + 8,
+                pos: HEADER_AREA,
                 file,
                 table,
                 next: 0,
@@ -685,6 +846,12 @@ impl Reader {
         if xxh64(&all, 0) != sum {
             return Err("corrupt header (checksum mismatch)".into());
         }
+        let mut padding = vec![0u8; (HEADER_AREA - need) as usize];
+        file.read_exact(&mut padding)
+            .map_err(|_| short(HEADER_AREA))?;
+        if padding.iter().any(|&b| b != 0) {
+            return Err("corrupt header (bytes after it not zero)".into());
+        }
         let file_key = Key([le64(&head[16..]), le64(&head[24..])]);
         if file_key != key {
             return Err(format!("holds another model (key {})", file_key.hex()));
@@ -700,7 +867,9 @@ impl Reader {
             .collect();
         let expected = table
             .iter()
-            .try_fold(need, |acc, s| s.words.checked_mul(8)?.checked_add(acc))
+            .try_fold(HEADER_AREA, |acc, s| {
+                s.words.checked_mul(8)?.checked_add(acc)
+            })
             .ok_or_else(|| "corrupt header (section sizes overflow)".to_string())?;
         if len < expected {
             return Err(format!("truncated: {len} of {expected} bytes"));
@@ -780,21 +949,22 @@ impl Reader {
 
 impl Reader {
     /// Maps the next section, of floats, into memory instead of reading it (the file's pages
-    /// are used in place), and checks it against its hash: (tag, words). Falls back to
+    /// are used in place): (tag, words still to be checked against their hash, which
+    /// [`Unchecked::check`] does, on another thread if the caller likes). Falls back to
     /// [`Self::read_next`] where the file's bytes cannot be viewed as floats in place (a
     /// big-endian machine) or the mapping fails.
     ///
     /// The mapping lasts as long as the words. Entries are replaced by renaming a new file over
     /// them and evicted by deleting them, neither of which changes a mapped file; a file cut
     /// short by another program while a run reads it would stop that run (`SIGBUS`).
-    pub fn map_next(&mut self) -> Result<(u32, crate::linsolve::FactorValues), String> {
+    pub fn map_next(&mut self) -> Result<(u32, Unchecked), String> {
         use crate::linsolve::FactorValues;
-        let read = |r: &mut Reader| -> Result<(u32, FactorValues), String> {
+        let read = |r: &mut Reader| -> Result<(u32, Unchecked), String> {
             let (tag, words) = r.read_next()?;
             let v = words.into_f64().ok_or_else(|| {
                 "inconsistent (a section of integers where floats belong)".to_string()
             })?;
-            Ok((tag, FactorValues::Owned(v)))
+            Ok((tag, Unchecked::Read(FactorValues::Owned(v))))
         };
         let Some(s) = self.table.get(self.next) else {
             return Err("fewer sections than expected".into());
@@ -817,33 +987,96 @@ impl Reader {
                 offset + 8 * len
             ));
         }
-        // The pages are read once, in order, by the hash.
-        #[cfg(unix)]
-        let _ = map.advise(memmap2::Advice::Sequential);
-        let mapped = MappedWords { map, offset, len };
-        let mut h = Xxh64::new(0);
-        h.update(mapped.bytes());
-        if h.finish() != hash {
-            return Err(format!(
-                "corrupt data (checksum mismatch in section {} of {})",
-                self.next + 1,
-                self.table.len()
-            ));
-        }
-        #[cfg(unix)]
-        let _ = mapped.map.advise(memmap2::Advice::Normal);
         self.next += 1;
         self.pos += 8 * words;
         self.file
             .seek(SeekFrom::Start(self.pos))
             .map_err(|e| format!("cannot be read: {e}"))?;
-        Ok((tag, FactorValues::Mapped(mapped)))
+        Ok((
+            tag,
+            Unchecked::Mapped {
+                words: MappedWords {
+                    map: Pages::Read(map),
+                    offset,
+                    len,
+                },
+                hash,
+                section: (self.next, self.table.len()),
+            },
+        ))
+    }
+}
+
+/// Floats of a section from [`Reader::map_next`], to be checked against their hash.
+pub enum Unchecked {
+    /// Read (and checked) already.
+    Read(crate::linsolve::FactorValues),
+    /// Mapped: the hash and the section's place (1-based number, of how many) for the report.
+    Mapped {
+        words: MappedWords,
+        hash: u64,
+        section: (usize, usize),
+    },
+}
+
+impl Unchecked {
+    /// The floats, once their bytes match the section's hash.
+    pub fn check(self) -> Result<crate::linsolve::FactorValues, String> {
+        match self {
+            Unchecked::Read(v) => Ok(v),
+            Unchecked::Mapped {
+                words,
+                hash,
+                section: (k, of),
+            } => {
+                // The pages are read once, in order, by the hash.
+                #[cfg(unix)]
+                let _ = words.map.advise(memmap2::Advice::Sequential);
+                let mut h = Xxh64::new(0);
+                h.update(words.bytes());
+                if h.finish() != hash {
+                    return Err(format!(
+                        "corrupt data (checksum mismatch in section {k} of {of})"
+                    ));
+                }
+                #[cfg(unix)]
+                let _ = words.map.advise(memmap2::Advice::Normal);
+                Ok(crate::linsolve::FactorValues::Mapped(words))
+            }
+        }
+    }
+}
+
+/// The pages of a mapped file.
+enum Pages {
+    Read(memmap2::Mmap),
+    /// Mapped for writing, and written ([`WritableSection`]).
+    Written(memmap2::MmapMut),
+}
+
+impl Pages {
+    #[cfg(unix)]
+    fn advise(&self, advice: memmap2::Advice) -> std::io::Result<()> {
+        match self {
+            Pages::Read(m) => m.advise(advice),
+            Pages::Written(m) => m.advise(advice),
+        }
+    }
+}
+
+impl std::ops::Deref for Pages {
+    type Target = [u8];
+    fn deref(&self) -> &[u8] {
+        match self {
+            Pages::Read(m) => m,
+            Pages::Written(m) => m,
+        }
     }
 }
 
 /// A section of floats mapped from a cache file (see [`Reader::map_next`]).
 pub struct MappedWords {
-    map: memmap2::Mmap,
+    map: Pages,
     /// Byte offset of the section in the file (a multiple of 8).
     offset: usize,
     /// Number of floats.
@@ -913,6 +1146,10 @@ pub struct Report {
     /// Why an entry was rebuilt, not written, or why there is no cache.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
+    /// A new entry: whether the factorisation computed its factor values in the entry's file
+    /// ([`Draft`]) rather than in memory, copied to the file afterwards.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub factor_in_place: Option<bool>,
 }
 
 impl Report {
@@ -922,6 +1159,7 @@ impl Report {
             path: None,
             bytes: None,
             note,
+            factor_in_place: None,
         }
     }
 }
@@ -1052,6 +1290,7 @@ impl Store {
             path: Some(path.display().to_string()),
             bytes: Some(bytes),
             note,
+            factor_in_place: Some(entry.draft.is_some()),
         };
         if bytes > self.max_bytes {
             let why = format!(
@@ -1076,7 +1315,7 @@ impl Store {
                 std::fs::create_dir_all(&store.dir)
                     .map_err(|e| format!("cannot create {}: {e}", store.dir.display()))?;
                 evict(&store.dir, store.max_bytes.saturating_sub(bytes), &p);
-                write_entry(&p, key, &entry).map_err(|e| e.to_string())?;
+                write_entry(&p, key, entry).map_err(|e| e.to_string())?;
                 crate::trace::mark("cache entry written");
                 Ok(())
             });
@@ -1231,35 +1470,12 @@ mod tests {
             Words::U64(u.iter().map(|&x| x as u64).collect()),
             Words::Usize(u.clone()),
             Words::Shared(shared.clone()),
-            // Ranges that cover every value once, in order, in pieces of 1 to 40 words.
-            Words::Gathered(shared, {
-                let (mut r, mut a) = (Vec::new(), 0);
-                while a < n {
-                    let len = (1 + a % 40).min(n - a);
-                    r.push((a, len));
-                    a += len;
-                }
-                r
-            }),
         ] {
             assert_eq!(w.len(), n);
             let (direct, converted) = both_ways(&w);
             assert_eq!(direct.len(), 8 * n);
             assert!(direct == converted);
         }
-        // Ranges with gaps (as the leading block of a factor skips the constraint rows): the
-        // bytes of exactly the floats in them, in order, both ways.
-        let shared = std::sync::Arc::new(crate::linsolve::FactorValues::Owned(f.clone()));
-        let ranges: Vec<(usize, usize)> =
-            (0..n / 50).map(|k| (50 * k + k % 7, 30 + k % 11)).collect();
-        let expected: Vec<u8> = ranges
-            .iter()
-            .flat_map(|&(a, len)| f[a..a + len].iter().flat_map(|x| x.to_le_bytes()))
-            .collect();
-        let w = Words::Gathered(shared, ranges);
-        let (direct, converted) = both_ways(&w);
-        assert_eq!(8 * w.len(), expected.len());
-        assert!(direct == expected && converted == expected);
         // A dense matrix's columns, all of them and the lower triangle (more than a chunk).
         let m = 1100;
         let a = std::sync::Arc::new(faer::Mat::from_fn(m, m, |i, j| i as f64 - 0.5 * j as f64));

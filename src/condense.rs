@@ -145,9 +145,10 @@ impl Condensed {
         grounded: &[usize],
         y_rows: &[Vec<(usize, f64)>],
         symbolic: &SaddleSymbolic,
+        dest: Option<crate::cache::WritableSection>,
     ) -> Result<Condensed, FactorError> {
         let (values, grounding, krr_scale) = grounded_values(k, n_i, grounded);
-        let chol = Factor::Saddle(symbolic.factorise(&values, y_rows)?);
+        let chol = Factor::Saddle(symbolic.factorise_in(&values, y_rows, dest)?);
         Ok(Condensed {
             n_i,
             n_r: k.n - n_i,

@@ -650,11 +650,27 @@ impl SaddleSymbolic {
     }
 
     /// Numeric `L D Lᵀ` factorisation with the values of `K̂` (in the pattern given to
-    /// [`Self::analyse`]) and the same `Y` rows.
+    /// [`Self::analyse`]) and the same `Y` rows, in fresh memory.
     pub fn factorise(
         &self,
         k_values: &[f64],
         y_rows: &[Vec<(usize, f64)>],
+    ) -> Result<SaddleFactor, FactorError> {
+        self.factorise_in(k_values, y_rows, None)
+    }
+
+    /// Length of the factor's values.
+    pub fn len_val(&self) -> usize {
+        self.inner.len_val()
+    }
+
+    /// [`Self::factorise`] with the values computed in `dest` when given (a new model-cache
+    /// entry's file, [`crate::cache::Draft`]; [`Self::len_val`] floats), the same bits.
+    pub fn factorise_in(
+        &self,
+        k_values: &[f64],
+        y_rows: &[Vec<(usize, f64)>],
+        dest: Option<crate::cache::WritableSection>,
     ) -> Result<SaddleFactor, FactorError> {
         use faer::dyn_stack::{MemBuffer, MemStack};
         let (n, m) = (self.n, self.m);
@@ -674,7 +690,21 @@ impl SaddleSymbolic {
         }
         let a = SparseColMatRef::new(sym(size, &self.col_ptr, &self.row_idx), &values);
         let par = factor_parallelism();
-        let mut l = vec_in_parallel(self.inner.len_val());
+        let mut dest = dest.filter(|d| d.len() == self.inner.len_val());
+        let mut owned = Vec::new();
+        let l: &mut [f64] = match &mut dest {
+            Some(d) => {
+                // Its pages faulted in on all cores, as `vec_in_parallel` does.
+                use rayon::prelude::*;
+                let v = d.as_mut_f64();
+                v.par_chunks_mut(1 << 16).for_each(|c| c.fill(0.0));
+                v
+            }
+            None => {
+                owned = vec_in_parallel(self.inner.len_val());
+                &mut owned
+            }
+        };
         let mut mem = MemBuffer::try_new(
             self.inner
                 .factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
@@ -685,7 +715,7 @@ impl SaddleSymbolic {
         })?;
         self.inner
             .factorize_numeric_ldlt(
-                &mut l,
+                l,
                 a,
                 Side::Upper,
                 Default::default(),
@@ -698,7 +728,11 @@ impl SaddleSymbolic {
                     FactorError::NotPositiveDefinite { pivot: index, n }
                 }
             })?;
-        let f = self.from_values(std::sync::Arc::new(FactorValues::Owned(l)))?;
+        let values = match dest {
+            Some(d) => FactorValues::Mapped(d.into_mapped()),
+            None => FactorValues::Owned(owned),
+        };
+        let f = self.from_values(std::sync::Arc::new(values))?;
         let values = f.values();
         // K̂ must be positive definite: every pivot of its block positive (a body that nothing
         // holds gives a vanishing or negative one).
@@ -811,55 +845,18 @@ impl Supernodes {
         }
     }
 
-    /// The layout of the leading block `L_KK` alone (the free DOFs' columns and rows, all that
-    /// the solves with `K̂` read) of a saddle factor with `n` free DOFs, and the ranges
-    /// `(start, len)` of the factor's values that make its values, in order: one per column.
-    /// The rest (the constraint rows below the free columns and the trailing block, from
-    /// which the Delassus operator is formed) is 18 % of Fig. 2's factor on L5 and 36 % on
-    /// L7; a model-cache entry keeps only this block.
-    pub fn leading(&self, n: usize) -> (Supernodes, Vec<(usize, usize)>) {
-        let mut lead = Supernodes {
-            begin: vec![0],
-            row_ptr: vec![0],
-            rows: Vec::new(),
-            val_ptr: vec![0],
-            fwd: self.fwd.clone(),
-        };
-        let mut ranges = Vec::with_capacity(n);
-        for s in 0..self.n_supernodes() {
-            let (start, end) = (self.begin[s], self.begin[s + 1]);
-            if start >= n {
-                break;
-            }
-            let pattern = &self.rows[self.row_ptr[s]..self.row_ptr[s + 1]];
-            let nrows = end - start + pattern.len();
-            // A supernode that reaches past the free columns has no free rows below it.
-            let wk = end.min(n) - start;
-            let kp = pattern.partition_point(|&r| r < n);
-            for c in 0..wk {
-                ranges.push((self.val_ptr[s] + c * nrows, wk + kp));
-            }
-            lead.begin.push(start + wk);
-            lead.rows.extend_from_slice(&pattern[..kp]);
-            lead.row_ptr.push(lead.rows.len());
-            lead.val_ptr.push(lead.len_val() + (wk + kp) * wk);
-        }
-        (lead, ranges)
-    }
-
     /// `Err` with what is wrong if this is not the layout of a saddle factor with `n` free DOFs
-    /// and `m` constraint rows (supernodes that tile `0..n + m`, or `0..n` for the leading
-    /// block alone ([`Self::leading`]), value ranges that fit their shapes, ascending
+    /// and `m` constraint rows (supernodes that tile `0..n + m`, value ranges that fit their
+    /// shapes, ascending
     /// off-diagonal rows below each supernode, an ordering that is a permutation with the free
     /// DOFs first); the length of the values is checked against [`Self::len_val`] by
     /// [`SaddleFactor::from_layout`], whose layout must pass this.
     pub fn check(&self, n: usize, m: usize) -> Result<(), String> {
         let size = n + m;
         let nsup = self.begin.len().saturating_sub(1);
-        let tiled = match self.begin.last() {
-            Some(&e) if e == size || e == n => e,
-            _ => return Err("supernodes do not tile the columns".into()),
-        };
+        if self.begin.last() != Some(&size) {
+            return Err("supernodes do not tile the columns".into());
+        }
         if self.begin.first() != Some(&0) || self.begin.windows(2).any(|w| w[0] >= w[1]) {
             return Err("supernodes do not tile the columns".into());
         }
@@ -883,7 +880,7 @@ impl Supernodes {
                 return Err("supernode values".into());
             }
             if pattern.first().is_some_and(|&r| r < self.begin[s + 1])
-                || pattern.last().is_some_and(|&r| r >= tiled)
+                || pattern.last().is_some_and(|&r| r >= size)
                 || pattern.windows(2).any(|w| w[0] >= w[1])
             {
                 return Err("supernode rows".into());
@@ -1179,13 +1176,6 @@ impl SaddleFactor {
     pub fn delassus(&self, keep_factor: bool) -> Option<(faer::Mat<f64>, Option<faer::Mat<f64>>)> {
         use faer::linalg::matmul::triangular::{BlockStructure, matmul};
         let (n, m) = (self.n, self.m);
-        // A factor restored from a model-cache entry keeps its leading block only
-        // ([`Supernodes::leading`]): its W comes with the entry, and is not formed again.
-        let whole = self.layout.begin.last() == Some(&(n + m));
-        debug_assert!(whole, "the Delassus operator of a leading block alone");
-        if !whole {
-            return None;
-        }
         let values = self.values();
         // L_MM with D_MM on its diagonal.
         let mut l = zeros_in_parallel(m, m);
@@ -1409,45 +1399,6 @@ mod tests {
         let mut x2 = b.clone();
         again.solve_in_place(&mut x2);
         assert!(x.iter().zip(&x2).all(|(a, c)| a.to_bits() == c.to_bits()));
-        // The leading block alone (as a model-cache entry keeps it) gives the same bits, from
-        // fewer values (the constraint rows' are left out).
-        let (lead, ranges) = layout.leading(n);
-        assert_eq!(lead.check(n, y.len()), Ok(()));
-        let values = f.values();
-        let kept: Vec<f64> = ranges
-            .iter()
-            .flat_map(|&(a, len)| values[a..a + len].iter().copied())
-            .collect();
-        assert_eq!(kept.len(), lead.len_val());
-        assert!(lead.len_val() < layout.len_val());
-        let leading = SaddleFactor::from_layout(
-            std::sync::Arc::new(lead),
-            std::sync::Arc::new(FactorValues::Owned(kept)),
-            n,
-            y.len(),
-        )
-        .unwrap();
-        let mut x3 = b.clone();
-        leading.solve_in_place(&mut x3);
-        assert!(x.iter().zip(&x3).all(|(a, c)| a.to_bits() == c.to_bits()));
-        // Three right-hand sides at once, against the whole factor.
-        let bs: Vec<f64> = (0..3 * n).map(|i| (i as f64 * 0.61).cos()).collect();
-        let (mut y1, mut y2) = (bs.clone(), bs.clone());
-        f.solve_block_in_place(&mut y1, 3);
-        leading.solve_block_in_place(&mut y2, 3);
-        assert!(y1.iter().zip(&y2).all(|(a, c)| a.to_bits() == c.to_bits()));
-        // Broken leading layouts: a constraint row below a free column, a tiling that ends
-        // between the free DOFs and the constraint rows.
-        let (lead, _) = layout.leading(n);
-        let with_rows = (0..lead.begin.len() - 1)
-            .find(|&s| lead.row_ptr[s + 1] > lead.row_ptr[s])
-            .expect("a leading supernode with rows below it");
-        let mut bad = lead.clone();
-        bad.rows[bad.row_ptr[with_rows + 1] - 1] = n;
-        assert!(bad.check(n, y.len()).is_err());
-        let mut bad = lead.clone();
-        *bad.begin.last_mut().unwrap() = n + 1;
-        assert!(bad.check(n, y.len()).is_err());
         // Broken layouts.
         let broken = |edit: &dyn Fn(&mut Supernodes)| {
             let mut l = (*layout).clone();

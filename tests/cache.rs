@@ -270,8 +270,28 @@ fn truncated_corrupted_and_foreign_entries_are_reported_and_rebuilt() {
     let file = entries(&cache).pop().unwrap();
     let good = std::fs::read(&file).unwrap();
 
-    let damage: [(&str, Vec<u8>, &str); 4] = [
+    // The factor values are the first section, from byte 4096 (after the header and its
+    // zero padding).
+    let damage: [(&str, Vec<u8>, &str); 6] = [
         ("truncated", good[..good.len() / 2].to_vec(), "truncated"),
+        (
+            "one flipped byte of the factor values",
+            {
+                let mut b = good.clone();
+                b[4096 + 8 * 123 + 3] ^= 0x04;
+                b
+            },
+            "checksum mismatch in section 1 of",
+        ),
+        (
+            "one byte of the header's padding set",
+            {
+                let mut b = good.clone();
+                b[4000] = 0x01;
+                b
+            },
+            "corrupt header (bytes after it not zero)",
+        ),
         (
             "one flipped payload byte",
             {
@@ -319,6 +339,48 @@ fn truncated_corrupted_and_foreign_entries_are_reported_and_rebuilt() {
         assert_same(&cold, &again, what);
     }
     // Entries take some 15 MB each: leave nothing behind.
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_entry_computed_in_its_file_is_the_entry_written_from_memory() {
+    let dir = tempdir("cache-in-place");
+    let case = base_case();
+    let cold = run_env(&dir, "cold", &case, &["--no-cache"], &[]);
+    let in_place = dir.join("cache-in-place");
+    let in_memory = dir.join("cache-in-memory");
+    let a = run(&dir, "in-place", &case, &in_place);
+    let b = run_env(
+        &dir,
+        "in-memory",
+        &case,
+        &["--cache", in_memory.to_str().unwrap()],
+        &[("STICKSLIP_CACHE_IN_PLACE", "0")],
+    );
+    assert_eq!((a.status(), b.status()), ("miss".into(), "miss".into()));
+    // The factorisation wrote its values in the entry's file (Linux, where the temporary
+    // directory's file system reserves blocks), or in memory when told to.
+    let in_place_used = a.summary()["cache"]["factor_in_place"].clone();
+    if cfg!(target_os = "linux") {
+        assert_eq!(in_place_used, json!(true), "{}", a.stderr);
+    }
+    assert_eq!(b.summary()["cache"]["factor_in_place"], json!(false));
+    let (ea, eb) = (entries(&in_place), entries(&in_memory));
+    assert_eq!((ea.len(), eb.len()), (1, 1));
+    assert!(
+        std::fs::read(&ea[0]).unwrap() == std::fs::read(&eb[0]).unwrap(),
+        "the two entries differ"
+    );
+    // Nothing else in either directory (no temporary file left).
+    for d in [&in_place, &in_memory] {
+        assert_eq!(std::fs::read_dir(d).unwrap().count(), 1, "{}", d.display());
+    }
+    assert_same(&cold, &a, "factor in the entry's file against no cache");
+    assert_same(&cold, &b, "factor in memory against no cache");
+    let hit = run(&dir, "hit", &case, &in_place);
+    assert_eq!(hit.status(), "hit");
+    assert_eq!(hit.summary()["cache"].get("factor_in_place"), None);
+    assert_same(&cold, &hit, "a hit of the entry computed in place");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

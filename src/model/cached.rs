@@ -1,19 +1,21 @@
 //! A model's linear algebra in the model cache ([`crate::cache`]): what an entry holds, and the
 //! parts of the model rebuilt from it.
 //!
-//! An entry holds, in this order: sizes and scalars (`META`), the fill-reducing ordering of
+//! An entry holds, in this order: the factor values, sizes and scalars (`META`), the fill-reducing ordering of
 //! the free DOFs, the grounded DOFs and their springs, the forces of the prescribed
 //! displacements; for a contact model the Delassus operator `W` (with, from
 //! [`crate::contact::solver::PREFIX_FROM`] contact unknowns, the order of the constraint rows
 //! and the packed Cholesky factor of `W` in it), the condensed loads `w0` (of
 //! the tractions, with the traction forces they belong to, and of the prescribed
-//! displacements) and the supernodal layout of the factor's leading block (the free DOFs'
-//! columns and rows, [`crate::linsolve::Supernodes::leading`]: a hit needs no symbolic
-//! analysis, and the rest of the saddle factor only served to form `W`); without contact the
-//! upper pattern of `K`, from which the analysis is redone with the stored ordering (faer has
-//! no way to store it); last, the values of the numeric factor (for a contact model those of
-//! the leading block), mapped from the file and checked against its hash in a second thread
-//! while the layout is checked or the analysis redone ([`cache::Reader::map_next`]).
+//! displacements) and the supernodal layout of the saddle factor (a hit needs no symbolic
+//! analysis); without contact the upper pattern of `K`, from which the analysis is redone with
+//! the stored ordering (faer has no way to store it). The values of the numeric factor come
+//! first, at a fixed offset, so that a contact model's factorisation can compute them in the
+//! new entry's file ([`cache::Draft`]); a hit maps them from the file and checks them against
+//! their hash in a second thread while the layout is checked or the analysis redone
+//! ([`cache::Reader::map_next`]). The whole saddle factor is kept (the solves with `K̂` read
+//! its leading block only; the rest served to form `W`), so that its values are the very
+//! array the factorisation wrote.
 
 use crate::assembly::UpperCsc;
 use crate::cache::{self, Entry, Key, Open, Report, Status, Store, Words};
@@ -36,7 +38,7 @@ mod tag {
     pub const F_TRACTION: u32 = 9;
     pub const W0_TRACTION: u32 = 10;
     pub const W0_PRESCRIBED: u32 = 11;
-    /// Always the last section.
+    /// Always the first section.
     pub const VALUES: u32 = 12;
     /// The supernodal layout of a contact model's factor ([`crate::linsolve::Supernodes`]).
     pub const SN_BEGIN: u32 = 13;
@@ -146,6 +148,7 @@ pub(super) fn lookup(
                         path: Some(store.path(key).display().to_string()),
                         bytes: Some(bytes),
                         note: None,
+                        factor_in_place: None,
                     };
                     return Lookup::Hit(Box::new(r));
                 }
@@ -177,6 +180,8 @@ pub(super) struct Built<'a> {
     pub f_prescribed: &'a [f64],
     pub f_traction: &'a [f64],
     pub contact_w0: &'a [Vec<f64>; 2],
+    /// The entry's file, its factor values computed in place ([`cache::Draft`]).
+    pub draft: Option<cache::DraftFile>,
 }
 
 /// The cache entry of a model just built.
@@ -191,16 +196,14 @@ pub(super) fn entry(b: Built) -> Entry {
         b.nnz as u64,
         b.condensed.krr_scale.to_bits(),
     ];
-    // A contact model's factor: its leading block only (what the solves with K̂ read; the
-    // Delassus operator formed from the rest is a section of its own).
+    // The whole factor, as the run computed it (for a contact model, in the entry's file when
+    // it has a draft), and a contact model's layout of it.
     let (layout, values) = match &b.condensed.chol {
-        Factor::Saddle(f) => {
-            let (layout, ranges) = f.layout().leading(s.n_free);
-            (Some(layout), Words::Gathered(f.values(), ranges))
-        }
+        Factor::Saddle(f) => (Some(f.layout()), Words::Shared(f.values())),
         Factor::Partial(f) => (None, Words::Shared(f.values())),
     };
     let mut sections = vec![
+        (tag::VALUES, values),
         (tag::META, Words::U64(meta)),
         (tag::ORDERING, Words::Usize(b.ordering)),
         (tag::GROUNDED, Words::Usize(b.grounded.to_vec())),
@@ -229,13 +232,15 @@ pub(super) fn entry(b: Built) -> Entry {
         sections.push((tag::ROW_IDX, Words::Usize(b.k.row_idx)));
     }
     if let Some(layout) = layout {
-        sections.push((tag::SN_BEGIN, Words::Usize(layout.begin)));
-        sections.push((tag::SN_ROW_PTR, Words::Usize(layout.row_ptr)));
-        sections.push((tag::SN_ROWS, Words::Usize(layout.rows)));
-        sections.push((tag::SN_VAL_PTR, Words::Usize(layout.val_ptr)));
+        sections.push((tag::SN_BEGIN, Words::Usize(layout.begin.clone())));
+        sections.push((tag::SN_ROW_PTR, Words::Usize(layout.row_ptr.clone())));
+        sections.push((tag::SN_ROWS, Words::Usize(layout.rows.clone())));
+        sections.push((tag::SN_VAL_PTR, Words::Usize(layout.val_ptr.clone())));
     }
-    sections.push((tag::VALUES, values));
-    Entry { sections }
+    Entry {
+        sections,
+        draft: b.draft,
+    }
 }
 
 fn is_permutation(p: &[usize], n: usize) -> bool {
@@ -266,13 +271,15 @@ fn restore(
     grounded: &[usize],
 ) -> Result<Restored, String> {
     let bad = |what: &str| format!("inconsistent ({what})");
-    let mut sec: HashMap<u32, Words> = HashMap::new();
-    while reader.remaining() > 1 {
-        let (t, w) = reader.read_next()?;
-        sec.insert(t, w);
-    }
     if reader.next_tag() != Some(tag::VALUES) {
         return Err(bad("no factor values"));
+    }
+    // Mapped now, checked against its hash on a second thread below.
+    let (_, values) = reader.map_next()?;
+    let mut sec: HashMap<u32, Words> = HashMap::new();
+    while reader.remaining() > 0 {
+        let (t, w) = reader.read_next()?;
+        sec.insert(t, w);
     }
     let mut take_u = |t: u32, what: &str| -> Result<Vec<usize>, String> {
         sec.remove(&t)
@@ -377,7 +384,7 @@ fn restore(
         l
     });
     let (analysis, analyse_s, values) = std::thread::scope(|s| {
-        let values = s.spawn(move || reader.map_next());
+        let values = s.spawn(move || values.check());
         let t = Instant::now();
         let analysis = match layout {
             Some(l) => l
@@ -397,8 +404,7 @@ fn restore(
             .unwrap_or_else(|_| Err("cannot be read (the reader panicked)".into()));
         (analysis, analyse_s, values)
     });
-    let (_, values) = values?;
-    let values = Arc::new(values);
+    let values = Arc::new(values?);
     let chol = match analysis? {
         Analysis::Layout(l) => SaddleFactor::from_layout(l, values, n, m).map(Factor::Saddle),
         Analysis::Partial(s) => s.from_values(values).map(Factor::Partial),

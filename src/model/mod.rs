@@ -354,19 +354,25 @@ impl Model {
                     timings.assemble = t_pattern + t_values + t_traction;
                     timings.analyse = t_analyse;
                     let nnz = k.row_idx.len();
-                    let (condensed, contact, ordering) = factorise(
+                    // A miss: the entry's file takes the factor's values as they are computed.
+                    let entry_to = match (&other, cache) {
+                        (cached::Lookup::Miss(p), Some((store, _))) => Some((store, p.key)),
+                        _ => None,
+                    };
+                    let (condensed, contact, ordering, draft) = factorise(
                         &mut k,
                         &dofs,
                         &grounded,
                         pair.zip(y),
                         e_star,
                         (symbolic?, row_order),
+                        entry_to,
                         timings,
                     )?;
                     // The pattern, the assembly and analysis together, the factorisation.
                     timings.build_span = t_pattern + t_joined + timings.factorise + t_traction;
                     let pending = match other {
-                        cached::Lookup::Miss(p) => Some((p, ordering, k)),
+                        cached::Lookup::Miss(p) => Some((p, ordering, k, draft)),
                         _ => None,
                     };
                     (condensed, contact, f_prescribed, nnz, None, pending)
@@ -407,7 +413,7 @@ impl Model {
 
         // A miss: write the entry while the run goes on.
         let cache_job = match (cache, pending) {
-            (Some((store, _)), Some((p, ordering, k))) => {
+            (Some((store, _)), Some((p, ordering, k, draft))) => {
                 let t = Instant::now();
                 let entry = cached::entry(cached::Built {
                     sizes: &sizes,
@@ -421,6 +427,7 @@ impl Model {
                     f_prescribed: &f_prescribed,
                     f_traction: &f_traction,
                     contact_w0: &contact_w0,
+                    draft,
                 });
                 let (report, job) = store.write_in_background(p.key, entry, p.status, p.note);
                 timings.cache += t.elapsed().as_secs_f64();
@@ -593,6 +600,16 @@ fn analyse(
 /// Records the `factorise` and `condense` (the Delassus operator) timings. Also returns the
 /// ordering of the analysis (for the model cache).
 #[allow(clippy::type_complexity)]
+/// What [`factorise`] gives: the condensed system, the contact model, the ordering of the free
+/// DOFs and the model-cache entry's draft file when the factor's values are in it.
+type Factorised = (
+    Condensed,
+    Option<crate::contact::ContactModel>,
+    Vec<usize>,
+    Option<crate::cache::DraftFile>,
+);
+
+#[allow(clippy::too_many_arguments)]
 fn factorise(
     k: &mut UpperCsc,
     dofs: &DofMap,
@@ -600,8 +617,9 @@ fn factorise(
     pair: Option<(crate::contact::Pair, crate::contact::ConstraintRows)>,
     e_star: Option<f64>,
     (analysis, row_order): (Analysis, Option<Vec<usize>>),
+    entry_to: Option<(&crate::cache::Store, crate::cache::Key)>,
     timings: &mut Timings,
-) -> Result<(Condensed, Option<crate::contact::ContactModel>, Vec<usize>), ModelError> {
+) -> Result<Factorised, ModelError> {
     let n_i = dofs.n_interior;
     let t = Instant::now();
     match (pair, analysis) {
@@ -610,10 +628,20 @@ fn factorise(
             // The values are in the factor now; the pattern stays for the model cache.
             k.values = Vec::new();
             timings.factorise = t.elapsed().as_secs_f64();
-            Ok((condensed, None, symbolic.ordering()))
+            Ok((condensed, None, symbolic.ordering(), None))
         }
         (Some((pair, y)), Analysis::Saddle(symbolic, y_free)) => {
-            let condensed = Condensed::build_saddle(k, n_i, grounded, &y_free, &symbolic)?;
+            // A new cache entry's file, whose pages the factorisation writes its values in
+            // (none where that cannot be done safely: the values go to memory, and the entry's
+            // writer copies them as for a model without contact).
+            let draft = entry_to.and_then(|(store, key)| {
+                crate::cache::Draft::create(store, key, symbolic.len_val())
+            });
+            let (draft, dest) = match draft {
+                Some(d) => (Some(d.file), Some(d.values)),
+                None => (None, None),
+            };
+            let condensed = Condensed::build_saddle(k, n_i, grounded, &y_free, &symbolic, dest)?;
             timings.factorise = t.elapsed().as_secs_f64();
             // The stiffness is in the factor now, and a contact model's cache entry does not
             // keep its pattern: freed before the Delassus operator's three dense m × m arrays
@@ -630,7 +658,7 @@ fn factorise(
                 row_order,
             );
             timings.condense = t.elapsed().as_secs_f64();
-            Ok((condensed, Some(contact), symbolic.ordering()))
+            Ok((condensed, Some(contact), symbolic.ordering(), draft))
         }
         _ => unreachable!("analysed with the same constraint rows"),
     }
