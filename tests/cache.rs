@@ -385,6 +385,24 @@ fn an_entry_computed_in_its_file_is_the_entry_written_from_memory() {
 }
 
 #[test]
+fn a_factorisation_that_fails_leaves_no_entry_and_no_temporary_file() {
+    // The upper body a hundred orders of magnitude softer than the lower: its pivots vanish
+    // against the lower body's, and the factorisation, computing in the entry's file, fails.
+    let dir = tempdir("cache-fails");
+    let cache = dir.join("cache");
+    let mut case = base_case();
+    case["bodies"][1]["E"] = json!(1e-20);
+    let r = run(&dir, "soft", &case, &cache);
+    assert_eq!(r.code, 3, "{}", r.stderr);
+    assert!(r.stderr.contains("not positive definite"), "{}", r.stderr);
+    let left: Vec<_> = std::fs::read_dir(&cache)
+        .map(|rd| rd.map(|e| e.unwrap().file_name()).collect())
+        .unwrap_or_default();
+    assert!(left.is_empty(), "left in the cache directory: {left:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn no_cache_writes_nothing_and_the_default_place_comes_from_the_environment() {
     let dir = tempdir("cache-env");
     let case = base_case();
