@@ -24,9 +24,15 @@
 //! The first section starts at a fixed offset so that it can be written before the others
 //! are known: a contact model's factor values are computed by the numeric factorisation in a
 //! shared mapping of the new entry's file ([`Draft`]), and the entry's writer then only hashes
-//! them, instead of copying hundreds of MB into the page cache (on Linux, where the file's
-//! blocks can be reserved first; elsewhere, or without room, they are computed in memory and
-//! written as before).
+//! them, instead of copying hundreds of MB into the page cache. That is done on Linux, on file
+//! systems whose `fallocate` reserves the blocks for good (ext2/3/4, XFS, tmpfs), once they
+//! are reserved; elsewhere, or without room, the values are computed in memory and written as
+//! before. The draft takes its room in the cache directory from the factorisation on (before
+//! the cap is enforced for the whole entry); a run that is killed leaves it as a temporary
+//! file, which a later run deletes once it is an hour old. The run's factor then lives in the
+//! file's pages: should the device fail to write them back while the run goes on and the
+//! system reclaim them, the run would read zeros, where in memory it would not (an I/O error
+//! of the cache's device; not guarded against).
 //!
 //! # Place and size
 //!
@@ -324,7 +330,8 @@ pub enum Words {
     U64(Vec<u64>),
     Usize(Vec<usize>),
     F64(Vec<f64>),
-    /// Floats shared with the model (the factor values, written while the run goes on).
+    /// Floats shared with the model (the factor values: written while the run goes on, or,
+    /// when the entry has a draft, already in its file and only hashed).
     Shared(crate::linsolve::SharedValues),
     /// Columns `(j, from)` of a dense matrix shared with the model, each from row `from` on,
     /// one after the other (the Delassus operator and its Cholesky factor: 130 and 65 MB at
@@ -544,14 +551,24 @@ impl WritableSection {
 
     /// The floats, to be written.
     pub fn as_mut_f64(&mut self) -> &mut [f64] {
-        let b = &mut self.map[self.offset..self.offset + 8 * self.len];
         assert!(
-            cfg!(target_endian = "little") && (b.as_ptr() as usize).is_multiple_of(8),
+            self.offset + 8 * self.len <= self.map.len(),
+            "a section within its mapping"
+        );
+        // SAFETY: in bounds (checked above).
+        let p = unsafe { self.map.as_mut_ptr().add(self.offset) };
+        assert!(
+            cfg!(target_endian = "little") && (p as usize).is_multiple_of(8),
             "mapped floats must be aligned little-endian words"
         );
         // SAFETY: aligned, in bounds, little-endian f64 words (checked above); any bit pattern
         // is a valid f64; the mapping lives as long as `self`, borrowed mutably here.
-        unsafe { std::slice::from_raw_parts_mut(b.as_mut_ptr().cast::<f64>(), self.len) }
+        unsafe { std::slice::from_raw_parts_mut(p.cast::<f64>(), self.len) }
+    }
+
+    /// The address of the floats (to tell them from a copy).
+    fn address(&self) -> usize {
+        self.map.as_ptr() as usize + self.offset
     }
 
     /// The section, written, as words that stay mapped (and are only read from here on).
@@ -571,6 +588,9 @@ pub struct DraftFile {
     tmp: PathBuf,
     /// Floats in its first section, already written.
     first_len: usize,
+    /// Where the run holds them (the draft's mapping), to check that the entry's first section
+    /// is those very floats.
+    first_at: usize,
 }
 
 impl Drop for DraftFile {
@@ -599,9 +619,12 @@ fn in_place_allowed() -> bool {
 impl Draft {
     /// The draft of the entry under `key`, or `None` (nothing left behind) where the values
     /// cannot be computed in place: not on Linux or not little-endian, the cache directory
-    /// cannot be written, the file system cannot reserve the blocks first (writing to a
-    /// mapped page without a block would kill the process), or the values alone exceed the
-    /// cache's cap.
+    /// cannot be written, the values alone exceed the cache's cap, or the file system is not
+    /// one whose `fallocate` reserves the blocks for good ([`reserves_blocks`]) or it could not
+    /// reserve them. A write to a mapped page for which the file system then finds no room
+    /// kills the process (`SIGBUS`): where space may still run out after `fallocate`
+    /// (copy-on-write file systems such as btrfs and ZFS, network file systems), the values
+    /// go to memory.
     pub fn create(store: &Store, key: Key, len: usize) -> Option<Draft> {
         let bytes = HEADER_AREA.checked_add(8 * len as u64)?;
         if !cfg!(all(target_os = "linux", target_endian = "little"))
@@ -619,30 +642,61 @@ impl Draft {
             .open(&tmp)
             .ok()?;
         // Removes the file from here on if anything fails.
-        let draft_file = DraftFile {
+        let mut draft_file = DraftFile {
             file,
             tmp,
             first_len: len,
+            first_at: 0,
         };
-        if !reserve(&draft_file.file, bytes) {
+        if !reserves_blocks(&draft_file.file) || !reserve(&draft_file.file, bytes) {
             return None;
         }
-        // SAFETY: a file this process just created under a name of its own; see
-        // `Reader::map_next` on files changed by other programs while mapped.
+        // SAFETY: a file this process just created (`create_new`) under a name of its own;
+        // see `Reader::map_next` on files changed by other programs while mapped.
         let map = unsafe {
             memmap2::MmapOptions::new()
                 .len(usize::try_from(bytes).ok()?)
                 .map_mut(&draft_file.file)
         }
         .ok()?;
+        let values = WritableSection {
+            map,
+            offset: HEADER_AREA as usize,
+            len,
+        };
+        draft_file.first_at = values.address();
         Some(Draft {
             file: draft_file,
-            values: WritableSection {
-                map,
-                offset: HEADER_AREA as usize,
-                len,
-            },
+            values,
         })
+    }
+}
+
+/// Whether `file` is on a file system whose `fallocate` reserves the blocks for good, so
+/// that writes through a mapping of them cannot fail for want of space: ext2/3/4, XFS and
+/// tmpfs (Linux `statfs` magic numbers). Not the copy-on-write ones (btrfs, ZFS, bcachefs:
+/// a write to a reserved block may need a new one) nor network or FUSE file systems.
+fn reserves_blocks(file: &std::fs::File) -> bool {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::fd::AsRawFd;
+        const EXT: i64 = 0xEF53;
+        const XFS: i64 = 0x5846_5342;
+        const TMPFS: i64 = 0x0102_1994;
+        // SAFETY: `statfs` is plain data, filled in by the call on a valid descriptor.
+        let mut st: libc::statfs = unsafe { std::mem::zeroed() };
+        if unsafe { libc::fstatfs(file.as_raw_fd(), &mut st) } != 0 {
+            return false;
+        }
+        // `f_type` is an `i64` on most targets, narrower on some.
+        #[allow(clippy::unnecessary_cast)]
+        let kind = st.f_type as i64;
+        matches!(kind, EXT | XFS | TMPFS)
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        let _ = file;
+        false
     }
 }
 
@@ -708,8 +762,14 @@ fn temporary_path(path: &Path) -> PathBuf {
         .file_name()
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
+    // The process id and a counter, and the clock's nanoseconds for processes that share a
+    // directory across machines or process-id namespaces; files are created with
+    // `create_new`, so a clash is an error, never a file taken over.
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos());
     dir.join(format!(
-        ".{name}.tmp{}-{}",
+        ".{name}.tmp{}-{}-{nanos:09}",
         std::process::id(),
         SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ))
@@ -719,28 +779,41 @@ fn temporary_path(path: &Path) -> PathBuf {
 /// entry's draft, whose first section is already written, if it has one).
 fn write_entry(path: &Path, key: Key, mut entry: Entry) -> std::io::Result<u64> {
     let len = entry.file_len();
+    if entry.sections.len() > MAX_SECTIONS {
+        return Err(std::io::Error::other("too many sections for the header"));
+    }
     let mut draft = match entry.draft.take() {
         Some(d) => d,
         None => {
             let tmp = temporary_path(path);
-            let file = std::fs::File::create(&tmp)?;
+            let file = std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&tmp)?;
             let d = DraftFile {
                 file,
                 tmp,
                 first_len: 0,
+                first_at: 0,
             };
             preallocate(&d.file, len);
             d
         }
     };
     let prewritten = draft.first_len;
-    if let Some((_, w)) = entry.sections.first()
-        && prewritten > 0
-        && w.len() != prewritten
-    {
-        return Err(std::io::Error::other(
-            "the entry's first section does not match its draft",
-        ));
+    // A draft's first section must be the very floats in its file.
+    if prewritten > 0 {
+        let same = match entry.sections.first() {
+            Some((_, Words::Shared(v))) => {
+                v.len() == prewritten && v.as_ptr() as usize == draft.first_at
+            }
+            _ => false,
+        };
+        if !same {
+            return Err(std::io::Error::other(
+                "the entry's first section is not the values in its draft",
+            ));
+        }
     }
     let mut f = std::io::BufWriter::with_capacity(CHUNK, &draft.file);
     f.seek(SeekFrom::Start(HEADER_AREA + 8 * prewritten as u64))?;
@@ -1064,12 +1137,14 @@ impl Pages {
     }
 }
 
-impl std::ops::Deref for Pages {
-    type Target = [u8];
-    fn deref(&self) -> &[u8] {
+impl Pages {
+    /// The start of the mapping and its length in bytes (no reference to the whole mapping is
+    /// formed: for a draft, the entry's writer writes the header page while the run reads the
+    /// values).
+    fn raw(&self) -> (*const u8, usize) {
         match self {
-            Pages::Read(m) => m,
-            Pages::Written(m) => m,
+            Pages::Read(m) => (m.as_ptr(), m.len()),
+            Pages::Written(m) => (m.as_ptr(), m.len()),
         }
     }
 }
@@ -1085,7 +1160,15 @@ pub struct MappedWords {
 
 impl MappedWords {
     fn bytes(&self) -> &[u8] {
-        &self.map[self.offset..self.offset + 8 * self.len]
+        let (p, len) = self.map.raw();
+        assert!(
+            self.offset + 8 * self.len <= len,
+            "a section within its mapping"
+        );
+        // SAFETY: in bounds (checked above) of a mapping that lives as long as `self`; these
+        // bytes are not written while the words exist (a draft's values are complete before
+        // they become words, and nothing writes them after).
+        unsafe { std::slice::from_raw_parts(p.add(self.offset), 8 * self.len) }
     }
 
     /// The floats, in place.
@@ -1302,6 +1385,7 @@ impl Store {
                 None => why,
             });
             report.path = None;
+            report.factor_in_place = None;
             return (report, None);
         }
         let store = self.clone();

@@ -690,7 +690,12 @@ impl SaddleSymbolic {
         }
         let a = SparseColMatRef::new(sym(size, &self.col_ptr, &self.row_idx), &values);
         let par = factor_parallelism();
-        let mut dest = dest.filter(|d| d.len() == self.inner.len_val());
+        let mut dest = dest;
+        assert!(
+            dest.as_ref()
+                .is_none_or(|d| d.len() == self.inner.len_val()),
+            "a factor's destination of another length"
+        );
         let mut owned = Vec::new();
         let l: &mut [f64] = match &mut dest {
             Some(d) => {

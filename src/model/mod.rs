@@ -593,13 +593,6 @@ fn analyse(
     })
 }
 
-/// Factorises the stiffness `k` analysed by [`analyse`] with springs on the `grounded`
-/// retained DOFs, and builds the contact model of `pair` on it: without contact, a partial
-/// factorisation with the retained (pilot) DOFs last; with contact, the saddle-point matrix
-/// with the contact constraint rows, whose trailing block gives the Delassus operator.
-/// Records the `factorise` and `condense` (the Delassus operator) timings. Also returns the
-/// ordering of the analysis (for the model cache).
-#[allow(clippy::type_complexity)]
 /// What [`factorise`] gives: the condensed system, the contact model, the ordering of the free
 /// DOFs and the model-cache entry's draft file when the factor's values are in it.
 type Factorised = (
@@ -609,6 +602,13 @@ type Factorised = (
     Option<crate::cache::DraftFile>,
 );
 
+/// Factorises the stiffness `k` analysed by [`analyse`] with springs on the `grounded`
+/// retained DOFs, and builds the contact model of `pair` on it: without contact, a partial
+/// factorisation with the retained (pilot) DOFs last; with contact, the saddle-point matrix
+/// with the contact constraint rows, whose trailing block gives the Delassus operator (its
+/// values computed in the file of the model-cache entry `entry_to`, on a miss, where that can
+/// be done safely: [`crate::cache::Draft`]). Records the `factorise` and `condense` (the
+/// Delassus operator) timings. Also returns the ordering of the analysis (for the model cache).
 #[allow(clippy::too_many_arguments)]
 fn factorise(
     k: &mut UpperCsc,
