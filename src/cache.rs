@@ -1501,6 +1501,19 @@ impl Job {
         self.join()
     }
 
+    /// Waits for the write, and reports a failure on standard error as dropping the job would:
+    /// the reason, if it failed.
+    pub fn settle(mut self) -> Option<String> {
+        let e = self.join().err()?;
+        if self.warn {
+            eprintln!(
+                "warning: model cache: could not write {}: {e}",
+                self.path.display()
+            );
+        }
+        Some(e)
+    }
+
     fn join(&mut self) -> Result<(), String> {
         match self.handle.take().map(|h| h.join()) {
             None | Some(Ok(Ok(()))) => Ok(()),

@@ -456,7 +456,7 @@ pub fn summarise(
         output_dir: out_dir.display().to_string(),
         status,
         energy: None,
-        cache: model.cache.clone(),
+        cache: model.cache_report(),
     };
     (summary, failure, lost_equilibrium)
 }

@@ -413,6 +413,37 @@ fn a_factorisation_that_fails_leaves_no_entry_and_no_temporary_file() {
 }
 
 #[test]
+fn an_entry_that_cannot_be_written_is_reported_as_not_written() {
+    // A directory where the entry's file goes: the lookup cannot read it, the rebuilt entry
+    // cannot be renamed over it. The summary says so instead of naming a file that is not
+    // there, and the run's results are those of a run without a cache.
+    let dir = tempdir("cache-unwritable");
+    let cache = dir.join("cache");
+    let case = base_case();
+    let cold = run_env(&dir, "cold", &case, &["--no-cache"], &[]);
+    assert_eq!(run(&dir, "first", &case, &cache).status(), "miss");
+    let file = entries(&cache).pop().unwrap();
+    std::fs::remove_file(&file).unwrap();
+    std::fs::create_dir(&file).unwrap();
+    let r = run(&dir, "blocked", &case, &cache);
+    assert_eq!(r.status(), "rebuilt");
+    let c = &r.summary()["cache"];
+    assert_eq!(c.get("path"), None, "{c}");
+    assert_eq!(c.get("factor_in_place"), None, "{c}");
+    let note = c["note"].as_str().unwrap();
+    assert!(note.contains("not written: "), "{note}");
+    assert!(
+        r.stderr.contains("could not write") && r.stderr.contains(file.to_str().unwrap()),
+        "{}",
+        r.stderr
+    );
+    assert_same(&cold, &r, "an entry that could not be written");
+    // The directory is still the only thing there: no temporary file left.
+    assert_eq!(std::fs::read_dir(&cache).unwrap().count(), 1);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn no_cache_writes_nothing_and_the_default_place_comes_from_the_environment() {
     let dir = tempdir("cache-env");
     let case = base_case();

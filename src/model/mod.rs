@@ -104,10 +104,10 @@ pub struct Model {
     pub timings: Timings,
     /// How the model cache served this model (`None`: built without one, as by [`Model::build`]).
     pub cache: Option<crate::cache::Report>,
-    /// The cache entry being written in the background: held for its `Drop`, which waits for
-    /// the write when the model is dropped.
-    #[allow(dead_code)]
-    cache_job: Option<crate::cache::Job>,
+    /// The cache entry being written in the background, until [`Model::cache_report`] waits
+    /// for it (else its `Drop` waits for the write when the model is dropped), and the reason
+    /// the write failed, once known.
+    cache_job: std::sync::Mutex<(Option<crate::cache::Job>, Option<String>)>,
     /// The factorised Delassus blocks shared by the simulations of this model once
     /// [`Model::share_contact_blocks`] has been called (a sweep does).
     contact_blocks: std::sync::OnceLock<std::sync::Arc<crate::contact::solver::BlockStore>>,
@@ -122,6 +122,27 @@ pub struct Model {
 }
 
 impl Model {
+    /// How the model cache served this model, for a summary: a new entry's write waited for
+    /// first, so that an entry that could not be written (no room, say) is reported as such
+    /// (`path` cleared, the reason in `note`) rather than named.
+    pub fn cache_report(&self) -> Option<crate::cache::Report> {
+        let mut report = self.cache.clone()?;
+        let mut job = self.cache_job.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(j) = job.0.take() {
+            job.1 = j.settle();
+        }
+        if let Some(e) = &job.1 {
+            let why = format!("not written: {e}");
+            report.note = Some(match report.note.take() {
+                Some(n) => format!("{n}; {why}"),
+                None => why,
+            });
+            report.path = None;
+            report.factor_in_place = None;
+        }
+        Some(report)
+    }
+
     /// Reads the mesh of a case and builds the model. `case_path` resolves the mesh path.
     pub fn build(case: &Case, case_path: &std::path::Path) -> Result<Model, ModelError> {
         Self::build_with_gap(case, case_path, None)
@@ -452,7 +473,7 @@ impl Model {
             pilot_separation,
             timings: timings.clone(),
             cache: cache_report,
-            cache_job,
+            cache_job: std::sync::Mutex::new((cache_job, None)),
             contact_blocks: std::sync::OnceLock::new(),
             force_geometry: std::sync::OnceLock::new(),
             scales: std::sync::OnceLock::new(),
