@@ -1135,9 +1135,7 @@ impl Pages {
             Pages::Written(m) => m.advise(advice),
         }
     }
-}
 
-impl Pages {
     /// The start of the mapping and its length in bytes (no reference to the whole mapping is
     /// formed: for a draft, the entry's writer writes the header page while the run reads the
     /// values).
@@ -1236,6 +1234,17 @@ pub struct Report {
 }
 
 impl Report {
+    /// The report of a new entry that was not written, and `why`: no file to name.
+    pub fn not_written(&mut self, why: &str) {
+        let why = format!("not written: {why}");
+        self.note = Some(match self.note.take() {
+            Some(n) => format!("{n}; {why}"),
+            None => why,
+        });
+        self.path = None;
+        self.factor_in_place = None;
+    }
+
     pub fn off(note: Option<String>) -> Report {
         Report {
             status: Status::Off,
@@ -1376,16 +1385,10 @@ impl Store {
             factor_in_place: Some(entry.draft.is_some()),
         };
         if bytes > self.max_bytes {
-            let why = format!(
-                "not written: {bytes} bytes exceed the cache cap of {} bytes (STICKSLIP_CACHE_MAX)",
+            report.not_written(&format!(
+                "{bytes} bytes exceed the cache cap of {} bytes (STICKSLIP_CACHE_MAX)",
                 self.max_bytes
-            );
-            report.note = Some(match report.note.take() {
-                Some(n) => format!("{n}; {why}"),
-                None => why,
-            });
-            report.path = None;
-            report.factor_in_place = None;
+            ));
             return (report, None);
         }
         let store = self.clone();

@@ -670,7 +670,7 @@ impl SaddleSymbolic {
         &self,
         k_values: &[f64],
         y_rows: &[Vec<(usize, f64)>],
-        dest: Option<crate::cache::WritableSection>,
+        mut dest: Option<crate::cache::WritableSection>,
     ) -> Result<SaddleFactor, FactorError> {
         use faer::dyn_stack::{MemBuffer, MemStack};
         let (n, m) = (self.n, self.m);
@@ -690,7 +690,6 @@ impl SaddleSymbolic {
         }
         let a = SparseColMatRef::new(sym(size, &self.col_ptr, &self.row_idx), &values);
         let par = factor_parallelism();
-        let mut dest = dest;
         assert!(
             dest.as_ref()
                 .is_none_or(|d| d.len() == self.inner.len_val()),

@@ -166,6 +166,19 @@ fn entries(cache: &Path) -> Vec<PathBuf> {
     v
 }
 
+/// A fresh directory `NAME` for a test (with `cache` in it), the base case, its run without a
+/// cache, and the entry a first run writes.
+fn cold_and_first_entry(name: &str) -> (PathBuf, PathBuf, Value, Run, PathBuf) {
+    let dir = tempdir(name);
+    let cache = dir.join("cache");
+    let case = base_case();
+    let cold = run_env(&dir, "cold", &case, &["--no-cache"], &[]);
+    assert_eq!(cold.status(), "off");
+    assert_eq!(run(&dir, "first", &case, &cache).status(), "miss");
+    let file = entries(&cache).pop().unwrap();
+    (dir, cache, case, cold, file)
+}
+
 fn assert_same(a: &Run, b: &Run, what: &str) {
     let (diff, n) = differences(&a.out, &b.out);
     assert!(n > 5, "{what}: only {n} files");
@@ -261,13 +274,7 @@ fn a_change_of_what_the_linear_algebra_depends_on_misses() {
 
 #[test]
 fn truncated_corrupted_and_foreign_entries_are_reported_and_rebuilt() {
-    let dir = tempdir("cache-corrupt");
-    let cache = dir.join("cache");
-    let case = base_case();
-    let cold = run_env(&dir, "cold", &case, &["--no-cache"], &[]);
-    assert_eq!(cold.status(), "off");
-    assert_eq!(run(&dir, "first", &case, &cache).status(), "miss");
-    let file = entries(&cache).pop().unwrap();
+    let (dir, cache, case, cold, file) = cold_and_first_entry("cache-corrupt");
     let good = std::fs::read(&file).unwrap();
 
     // The factor values are the first section, from byte 4096 (after the header and its
@@ -417,12 +424,7 @@ fn an_entry_that_cannot_be_written_is_reported_as_not_written() {
     // A directory where the entry's file goes: the lookup cannot read it, the rebuilt entry
     // cannot be renamed over it. The summary says so instead of naming a file that is not
     // there, and the run's results are those of a run without a cache.
-    let dir = tempdir("cache-unwritable");
-    let cache = dir.join("cache");
-    let case = base_case();
-    let cold = run_env(&dir, "cold", &case, &["--no-cache"], &[]);
-    assert_eq!(run(&dir, "first", &case, &cache).status(), "miss");
-    let file = entries(&cache).pop().unwrap();
+    let (dir, cache, case, cold, file) = cold_and_first_entry("cache-unwritable");
     std::fs::remove_file(&file).unwrap();
     std::fs::create_dir(&file).unwrap();
     let r = run(&dir, "blocked", &case, &cache);

@@ -132,13 +132,7 @@ impl Model {
             job.1 = j.settle();
         }
         if let Some(e) = &job.1 {
-            let why = format!("not written: {e}");
-            report.note = Some(match report.note.take() {
-                Some(n) => format!("{n}; {why}"),
-                None => why,
-            });
-            report.path = None;
-            report.factor_in_place = None;
+            report.not_written(e);
         }
         Some(report)
     }
