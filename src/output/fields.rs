@@ -157,6 +157,16 @@ impl BodiesMesh {
     }
 }
 
+/// The names and component counts of the bodies dataset's point fields, in their order.
+const BODIES_FIELDS: [(&str, u32); 6] = [
+    ("displacement", 3),
+    ("stress_xx", 1),
+    ("stress_yy", 1),
+    ("stress_xy", 1),
+    ("stress_zz", 1),
+    ("von_mises", 1),
+];
+
 /// The point fields of the bodies dataset at one step: displacement, stresses, von Mises
 /// (`parallel`: the stresses on rayon's threads, else on the calling thread).
 pub fn bodies_fields(model: &Model, u: &[f64], parallel: bool) -> Vec<vtu::Field> {
@@ -183,14 +193,15 @@ pub fn bodies_fields(model: &Model, u: &[f64], parallel: bool) -> Vec<vtu::Field
         szz.push(s[3]);
         vm.push(crate::elasticity::von_mises(s[0], s[1], s[2], s[3]));
     }
-    vec![
-        vtu::Field::vector("displacement", disp),
-        vtu::Field::scalar("stress_xx", sxx),
-        vtu::Field::scalar("stress_yy", syy),
-        vtu::Field::scalar("stress_xy", sxy),
-        vtu::Field::scalar("stress_zz", szz),
-        vtu::Field::scalar("von_mises", vm),
-    ]
+    [disp, sxx, syy, sxy, szz, vm]
+        .into_iter()
+        .zip(BODIES_FIELDS)
+        .map(|(values, (name, ncomp))| vtu::Field {
+            name: name.into(),
+            ncomp,
+            values,
+        })
+        .collect()
 }
 
 /// The bodies dataset of one step from its [`bodies_fields`] (`compress`: zlib-compressed
@@ -201,4 +212,10 @@ pub fn bodies_vtu<'a>(
     compress: bool,
 ) -> vtu::Encoded<'a> {
     vtu::unstructured(&mesh.topology, fields, &mesh.cell_data, compress)
+}
+
+/// What follows the point fields in the raw bodies dataset of every step
+/// ([`vtu::raw_after_point_data`]): the cells' data, the points and the cells.
+pub fn bodies_after_point_data(mesh: &BodiesMesh) -> vtu::AfterPointData<'_> {
+    vtu::raw_after_point_data(&mesh.topology, &BODIES_FIELDS, &mesh.cell_data)
 }

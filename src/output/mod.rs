@@ -110,7 +110,7 @@ mod direct {
     use std::path::Path;
 
     /// The alignment of the buffer, of each write's length and of the file offsets.
-    const ALIGN: usize = 4096;
+    pub const ALIGN: usize = 4096;
     /// The buffer the parts are copied through (aligned; one allocation per file).
     const CHUNK: usize = 4 << 20;
 
@@ -119,19 +119,10 @@ mod direct {
     /// usual way), `Err` on any other failure.
     #[cfg(target_os = "linux")]
     pub fn write(path: &Path, parts: &[&[u8]], len: usize) -> std::io::Result<bool> {
-        use std::os::unix::fs::OpenOptionsExt;
-        let mut f = match std::fs::OpenOptions::new()
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .custom_flags(libc::O_DIRECT)
-            .open(path)
-        {
-            Ok(f) => f,
-            Err(e) if e.raw_os_error() == Some(libc::EINVAL) => return Ok(false),
-            Err(e) => return Err(e),
+        let Some(mut f) = open(path)? else {
+            return Ok(false);
         };
-        if !copy_out(&mut f, parts)? {
+        if !copy_out(&mut f, parts, 0, usize::MAX)? {
             drop(f);
             std::fs::remove_file(path)?;
             return Ok(false);
@@ -141,16 +132,43 @@ mod direct {
         Ok(true)
     }
 
-    /// Writes `parts` to `f` (opened with `O_DIRECT`) through an aligned buffer, the last block
-    /// padded to the alignment (the caller cuts the file back). `Ok(false)` when the first
+    /// Creates (or truncates) `path` for writes past the page cache; `None` when the file
+    /// system does not take `O_DIRECT` (nothing is left at `path`).
+    #[cfg(target_os = "linux")]
+    pub fn open(path: &Path) -> std::io::Result<Option<std::fs::File>> {
+        use std::os::unix::fs::OpenOptionsExt;
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .custom_flags(libc::O_DIRECT)
+            .open(path)
+        {
+            Ok(f) => Ok(Some(f)),
+            Err(e) if e.raw_os_error() == Some(libc::EINVAL) => Ok(None),
+            Err(e) => Err(e),
+        }
+    }
+
+    #[cfg(not(target_os = "linux"))]
+    pub fn open(_: &Path) -> std::io::Result<Option<std::fs::File>> {
+        Ok(None)
+    }
+
+    /// Writes bytes `skip..skip + limit` of `parts` (to their end if fewer) at the position of
+    /// `f` (opened with `O_DIRECT`, the position aligned) through an aligned buffer, the last
+    /// block padded to the alignment (the caller cuts the file back). `Ok(false)` when the first
     /// write is refused as unsupported (a file system can accept the flag and refuse that).
     #[cfg(target_os = "linux")]
-    fn copy_out(f: &mut std::fs::File, parts: &[&[u8]]) -> std::io::Result<bool> {
+    pub fn copy_out(
+        f: &mut std::fs::File,
+        parts: &[&[u8]],
+        mut skip: usize,
+        mut limit: usize,
+    ) -> std::io::Result<bool> {
         use std::io::Write;
-        let layout = std::alloc::Layout::from_size_align(CHUNK, ALIGN).expect("a valid layout");
-        let owner = Aligned::new(layout);
-        // SAFETY: `owner` holds `CHUNK` zeroed bytes until the end of the function.
-        let buf = unsafe { std::slice::from_raw_parts_mut(owner.0, CHUNK) };
+        let mut owner = Aligned::take();
+        let buf = owner.bytes();
         let (mut fill, mut first) = (0, true);
         let mut flush = |bytes: &[u8]| match f.write_all(bytes) {
             Ok(()) => {
@@ -162,6 +180,10 @@ mod direct {
         };
         for p in parts {
             let mut p: &[u8] = p;
+            let cut = skip.min(p.len());
+            (p, skip) = (&p[cut..], skip - cut);
+            p = &p[..limit.min(p.len())];
+            limit -= p.len();
             while !p.is_empty() {
                 let n = p.len().min(CHUNK - fill);
                 buf[fill..fill + n].copy_from_slice(&p[..n]);
@@ -188,27 +210,161 @@ mod direct {
         Ok(false)
     }
 
-    /// An aligned allocation of zeroed bytes, freed on drop.
+    #[cfg(not(target_os = "linux"))]
+    pub fn copy_out(_: &mut std::fs::File, _: &[&[u8]], _: usize, _: usize) -> std::io::Result<bool> {
+        Ok(false)
+    }
+
+    /// An aligned buffer of `CHUNK` bytes, handed back to [`POOL`] on drop.
     #[cfg(target_os = "linux")]
-    struct Aligned(*mut u8, std::alloc::Layout);
+    struct Aligned(Option<Buffer>);
+
+    /// An aligned allocation of `CHUNK` zeroed bytes, freed on drop.
+    #[cfg(target_os = "linux")]
+    struct Buffer(*mut u8);
+
+    // SAFETY: the allocation is owned by the `Buffer` alone.
+    #[cfg(target_os = "linux")]
+    unsafe impl Send for Buffer {}
+
+    /// Buffers kept for the next files (a fresh allocation of 4 MB faults in its 1024 pages
+    /// at its first use: 20 ms of the CPU after the factorisation of Fig. 2 at L5 went to
+    /// this copy, most of it in those faults).
+    #[cfg(target_os = "linux")]
+    static POOL: std::sync::Mutex<Vec<Buffer>> = std::sync::Mutex::new(Vec::new());
+
+    /// Buffers the pool keeps at most (the writer's thread, the driver's and those that
+    /// write ahead use one each at a time).
+    #[cfg(target_os = "linux")]
+    const POOL_MAX: usize = 4;
+
+    #[cfg(target_os = "linux")]
+    fn layout() -> std::alloc::Layout {
+        std::alloc::Layout::from_size_align(CHUNK, ALIGN).expect("a valid layout")
+    }
 
     #[cfg(target_os = "linux")]
     impl Aligned {
-        fn new(layout: std::alloc::Layout) -> Aligned {
-            // SAFETY: the layout has a nonzero size.
-            let p = unsafe { std::alloc::alloc_zeroed(layout) };
-            if p.is_null() {
-                std::alloc::handle_alloc_error(layout);
-            }
-            Aligned(p, layout)
+        /// A buffer from the pool, or a new one.
+        fn take() -> Aligned {
+            let kept = POOL.lock().unwrap_or_else(|e| e.into_inner()).pop();
+            Aligned(Some(kept.unwrap_or_else(|| {
+                // SAFETY: the layout has a nonzero size.
+                let p = unsafe { std::alloc::alloc_zeroed(layout()) };
+                if p.is_null() {
+                    std::alloc::handle_alloc_error(layout());
+                }
+                Buffer(p)
+            })))
+        }
+
+        fn bytes(&mut self) -> &mut [u8] {
+            let p = self.0.as_ref().expect("a buffer").0;
+            // SAFETY: `p` holds `CHUNK` initialised bytes (zeroed when allocated), borrowed
+            // mutably with `self`.
+            unsafe { std::slice::from_raw_parts_mut(p, CHUNK) }
         }
     }
 
     #[cfg(target_os = "linux")]
     impl Drop for Aligned {
         fn drop(&mut self) {
-            // SAFETY: allocated in `new` with this layout.
-            unsafe { std::alloc::dealloc(self.0, self.1) };
+            let Some(b) = self.0.take() else { return };
+            let mut pool = POOL.lock().unwrap_or_else(|e| e.into_inner());
+            if pool.len() < POOL_MAX {
+                pool.push(b);
+            }
+        }
+    }
+
+    #[cfg(target_os = "linux")]
+    impl Drop for Buffer {
+        fn drop(&mut self) {
+            // SAFETY: allocated in `Aligned::take` with this layout.
+            unsafe { std::alloc::dealloc(self.0, layout()) };
+        }
+    }
+}
+
+/// A large file's temporary whose bytes from an aligned offset on are written ahead of the
+/// rest ([`write_ahead`]), past the page cache; removed when dropped unfinished.
+///
+/// A step's `.vtu` of the bodies ends with the same bytes at every step (the cells' data, the
+/// points and the cells: half of its 11 MB at L5). Written as a step is taken for output, they
+/// go to the device while the step's fields are recovered and its stresses computed, instead of
+/// after them: at the end of a run the device's transfer of the last steps' files (about 1 ms
+/// per MB on the machine of `docs/benchmarks.md`, with the processor idle) is on the critical
+/// path.
+pub struct Ahead {
+    tmp: PathBuf,
+    file: Option<std::fs::File>,
+    /// The aligned offset from which the bytes are written.
+    from: usize,
+    /// The file's length.
+    len: usize,
+}
+
+/// Writes the temporary file of `path`, of `len` bytes of which `parts` are those from byte
+/// `offset` on, from the first aligned offset at or after `offset`. `Ok(None)` (nothing left
+/// behind) for a file too small to be worth it or a file system that does not take
+/// `O_DIRECT`; on an error nothing is left behind either.
+pub fn write_ahead(
+    path: &Path,
+    len: usize,
+    offset: usize,
+    parts: &[&[u8]],
+) -> std::io::Result<Option<Ahead>> {
+    use std::io::{Seek, SeekFrom};
+    let from = offset.next_multiple_of(direct::ALIGN);
+    if len < DIRECT_FROM || from >= len {
+        return Ok(None);
+    }
+    let tmp = temporary_name(path);
+    let Some(file) = direct::open(&tmp)? else {
+        return Ok(None);
+    };
+    let mut ahead = Ahead {
+        tmp,
+        file: Some(file),
+        from,
+        len,
+    };
+    let f = ahead.file.as_mut().expect("just opened");
+    f.seek(SeekFrom::Start(from as u64))?;
+    if !direct::copy_out(f, parts, from - offset, usize::MAX)? {
+        // Dropped: the file is removed.
+        return Ok(None);
+    }
+    Ok(Some(ahead))
+}
+
+/// Finishes a file begun by [`write_ahead`] with its whole contents `parts` (whose bytes from
+/// the aligned offset on are not written again): cut to its length, synced. Returns its
+/// temporary name; nothing is left behind on an error.
+pub fn finish_ahead(mut ahead: Ahead, parts: &[&[u8]]) -> std::io::Result<PathBuf> {
+    use std::io::{Seek, SeekFrom};
+    let total: usize = parts.iter().map(|p| p.len()).sum();
+    if total != ahead.len {
+        return Err(std::io::Error::other(format!(
+            "{} bytes to write where {} were planned",
+            total, ahead.len
+        )));
+    }
+    let f = ahead.file.as_mut().expect("an unfinished file");
+    f.seek(SeekFrom::Start(0))?;
+    if !direct::copy_out(f, parts, 0, ahead.from)? {
+        return Err(std::io::Error::other("a write past the page cache refused"));
+    }
+    f.set_len(ahead.len as u64)?;
+    f.sync_all().ok();
+    ahead.file = None;
+    Ok(std::mem::take(&mut ahead.tmp))
+}
+
+impl Drop for Ahead {
+    fn drop(&mut self) {
+        if self.file.take().is_some() {
+            let _ = std::fs::remove_file(&self.tmp);
         }
     }
 }
@@ -457,6 +613,74 @@ mod tests {
                 "{}",
                 dir.display()
             );
+            std::fs::remove_dir_all(&dir).unwrap();
+        }
+    }
+
+    /// A file begun ahead from any offset (aligned, not, in its last block, past its end) and
+    /// finished with its whole contents reads back as written whole; a file begun and not
+    /// finished, or finished with contents of another length, leaves nothing.
+    #[test]
+    fn files_written_ahead_read_back_as_written_whole() {
+        let bytes: Vec<u8> = (0..(9 << 20) + 4_321u32)
+            .map(|i| (i.wrapping_mul(2_654_435_761) >> 11) as u8)
+            .collect();
+        let len = bytes.len();
+        // Parts that straddle the offsets and the chunks.
+        let cuts = [0, 17, 4_095, (4 << 20) + 1, (5 << 20) + 3, len - 100, len];
+        let parts: Vec<&[u8]> = cuts.windows(2).map(|w| &bytes[w[0]..w[1]]).collect();
+        let tail_of = |offset: usize| -> Vec<&[u8]> {
+            let mut rest = Vec::new();
+            let mut at = 0;
+            for p in &parts {
+                if at + p.len() > offset {
+                    rest.push(&p[offset.saturating_sub(at)..]);
+                }
+                at += p.len();
+            }
+            rest
+        };
+        let mut dirs =
+            vec![std::env::temp_dir().join(format!("stickslip-ahead-{}", std::process::id()))];
+        if Path::new("/dev/shm").is_dir() {
+            dirs.push(PathBuf::from(format!(
+                "/dev/shm/stickslip-ahead-{}",
+                std::process::id()
+            )));
+        }
+        for dir in dirs {
+            std::fs::create_dir_all(&dir).unwrap();
+            let path = dir.join("big.vtu");
+            let mut begun = 0;
+            for offset in [0, 4_096, 5_000, (4 << 20) + 7, len - 5_000, len - 10] {
+                let ahead = write_ahead(&path, len, offset, &tail_of(offset)).unwrap();
+                let Some(ahead) = ahead else {
+                    // Only where the file system refuses O_DIRECT, or nothing is left to write
+                    // ahead (the last block): nothing is left behind.
+                    let names = names_in(&dir);
+                    assert!(names.iter().all(|n| !n.contains(".tmp")), "{names:?}");
+                    continue;
+                };
+                begun += 1;
+                let tmp = finish_ahead(ahead, &parts).unwrap();
+                assert!(std::fs::read(&tmp).unwrap() == bytes, "offset {offset}");
+                commit(&tmp, &path).unwrap();
+                assert_eq!(names_in(&dir), ["big.vtu"]);
+            }
+            if dir.starts_with(std::env::temp_dir()) {
+                // A disk-backed directory takes O_DIRECT: every offset but the last block's.
+                assert_eq!(begun, 5, "{}", dir.display());
+            }
+            if let Some(a) = write_ahead(&path, len, 5_000, &tail_of(5_000)).unwrap() {
+                drop(a);
+                assert_eq!(names_in(&dir), ["big.vtu"], "a file dropped unfinished is removed");
+            }
+            if let Some(a) = write_ahead(&path, len, 5_000, &tail_of(5_000)).unwrap() {
+                let err = finish_ahead(a, &parts[1..]).unwrap_err();
+                assert!(err.to_string().contains("were planned"), "{err}");
+                assert_eq!(names_in(&dir), ["big.vtu"], "a file not finished is removed");
+            }
+            assert!(std::fs::read(&path).unwrap() == bytes);
             std::fs::remove_dir_all(&dir).unwrap();
         }
     }

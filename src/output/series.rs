@@ -8,13 +8,15 @@
 //! depend on it. When it falls behind it takes the queued steps together (up to [`BATCH`]):
 //! their displacement fields come from one block solve (which reads the factor once for all,
 //! and gives each field bit for bit). Once the driver has solved its last step it prepares the
-//! later half of the steps still waiting on its own thread ([`Background::help`]; on all
-//! threads when the writer has caught up) and hands them back, and the writer puts them in
+//! last steps still waiting on its own thread ([`Background::help`]; on all threads when the
+//! writer has caught up) and hands them back, and the writer puts them in
 //! place in their turn. Each array goes to the file
 //! from its own memory. Its first error stops it; the driver sees that error at its next step,
 //! and stops.
 
-use super::fields::{BodiesMesh, bodies_fields, bodies_vtu, contact_csv, contact_vtu};
+use super::fields::{
+    BodiesMesh, bodies_after_point_data, bodies_fields, bodies_vtu, contact_csv, contact_vtu,
+};
 use super::vtu::Field;
 use super::{PvdEntry, pvd};
 use crate::contact::solver::State;
@@ -104,7 +106,57 @@ impl Bodies<'_> {
     /// The fields of `steps` (recovered from their contact states in one block solve, on all
     /// threads with `spread`, else in one sweep on this thread), sent to the steps that asked
     /// for them, and their bodies datasets written side by side to their temporary names.
+    ///
+    /// The bytes of the datasets that do not depend on the step (after the point fields) are
+    /// written meanwhile on a thread of its own ([`super::Ahead`]), where the file system
+    /// allows it; the rest of each file follows once its fields are known. The same bytes.
     fn prepare(&self, steps: Vec<StepOutput>, spread: bool) -> Prepared {
+        std::thread::scope(|scope| {
+            let ahead = (!self.compress).then(|| {
+                let names: Vec<PathBuf> = steps.iter().map(|s| self.bodies_path(s)).collect();
+                std::thread::Builder::new()
+                    .name("stickslip-ahead".into())
+                    .spawn_scoped(scope, move || self.write_ahead(&names))
+                    .ok()
+            });
+            self.prepare_with(steps, spread, move || {
+                ahead
+                    .flatten()
+                    .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+            })
+        })
+    }
+
+    /// The path of a step's bodies dataset.
+    fn bodies_path(&self, s: &StepOutput) -> PathBuf {
+        self.dir.join(format!("{}_{:04}.vtu", self.stem, s.step))
+    }
+
+    /// The step-independent bytes of the bodies datasets `paths`, written ahead to their
+    /// temporary names: per file, `None` where not (the file is then written whole).
+    fn write_ahead(&self, paths: &[PathBuf]) -> Vec<Option<super::Ahead>> {
+        let mesh = self.mesh.get_or_init(|| BodiesMesh::new(self.model));
+        let after = bodies_after_point_data(mesh);
+        let parts = after.parts();
+        paths
+            .iter()
+            .map(|path| {
+                // A failure here only loses the head start: the whole file is written later,
+                // and that write reports any error.
+                super::write_ahead(path, after.len, after.offset, &parts)
+                    .ok()
+                    .flatten()
+            })
+            .collect()
+    }
+
+    /// [`Self::prepare`] with the files begun ahead that `ahead` waits for.
+    fn prepare_with(
+        &self,
+        steps: Vec<StepOutput>,
+        spread: bool,
+        ahead: impl FnOnce() -> Option<Vec<Option<super::Ahead>>>,
+    ) -> Prepared {
         use rayon::prelude::*;
         let t = Instant::now();
         crate::trace::mark(format_args!(
@@ -154,18 +206,33 @@ impl Bodies<'_> {
         };
         crate::trace::mark("point fields");
         let mesh = self.mesh.get_or_init(|| BodiesMesh::new(model));
-        let (dir, stem, compress) = (self.dir, self.stem, self.compress);
-        let write = |(s, data): (&StepOutput, &Vec<Field>)| {
-            let name = format!("{stem}_{:04}.vtu", s.step);
-            let path = dir.join(&name);
-            let tmp = super::write_temporary(&path, &bodies_vtu(mesh, data, compress).parts())
-                .map_err(|source| write_error(&path, source))?;
+        let compress = self.compress;
+        let mut ahead = ahead().unwrap_or_default();
+        ahead.resize_with(steps.len(), || None);
+        let write = |((s, data), ahead): ((&StepOutput, &Vec<Field>), Option<super::Ahead>)| {
+            let path = self.bodies_path(s);
+            let name = path
+                .file_name()
+                .expect("a file name")
+                .to_string_lossy()
+                .into_owned();
+            let parts = bodies_vtu(mesh, data, compress);
+            let tmp = match ahead {
+                Some(a) => super::finish_ahead(a, &parts.parts()),
+                None => super::write_temporary(&path, &parts.parts()),
+            }
+            .map_err(|source| write_error(&path, source))?;
             Ok((tmp, name))
         };
         let bodies = if spread {
-            steps.par_iter().zip(&point_data).map(write).collect()
+            steps
+                .par_iter()
+                .zip(&point_data)
+                .zip(ahead)
+                .map(write)
+                .collect()
         } else {
-            steps.iter().zip(&point_data).map(write).collect()
+            steps.iter().zip(&point_data).zip(ahead).map(write).collect()
         };
         crate::trace::mark("bodies files prepared");
         Prepared {
@@ -380,8 +447,8 @@ impl Shared {
 /// A [`Series`] written on a thread of its own, fed through a queue of [`QUEUE`] steps: the
 /// driver hands it a step and goes on, and waits only when the queue is full. The writer takes
 /// the steps from the front of the queue, up to [`BATCH`] waiting together (one block solve
-/// for their fields). When the driver has no more steps to solve it takes the later half of
-/// the steps still waiting and prepares them itself ([`Self::help`]), so that both cores
+/// for their fields). When the driver has no more steps to solve it takes the last of the
+/// steps still waiting and prepares them itself ([`Self::help`]), so that both cores
 /// write the last steps; the writer puts them in place in their turn.
 pub struct Background<'scope, 'env> {
     shared: Arc<Shared>,
@@ -473,8 +540,12 @@ impl<'scope, 'env> Background<'scope, 'env> {
         shared.changed.notify_all();
         loop {
             // The last run of steps waiting in the queue (those after it, if any, are taken
-            // already): the later half of it, up to a batch, in place of which goes a
-            // marker. The writer, busy with the steps before them, takes the earlier half.
+            // already): its last steps, up to a batch, in place of which goes a marker. While
+            // the writer prepares steps of its own, all of them up to a batch, in one block
+            // solve (at the end of Fig. 2 on L5 the writer prepares two steps and two wait:
+            // taken one by one, each cost a sweep of the factor, 15 and 17 ms, where the
+            // two together took 28 ms); else the later half, and the writer takes the
+            // earlier.
             let (id, steps, spread) = {
                 let mut q = shared.lock();
                 if q.stopped {
@@ -493,7 +564,11 @@ impl<'scope, 'env> Background<'scope, 'env> {
                     .range(..end)
                     .rposition(|i| !matches!(i, Item::Step(_)))
                     .map_or(0, |k| k + 1);
-                let take = (end - start).div_ceil(2).min(BATCH);
+                let take = if q.preparing {
+                    (end - start).min(BATCH)
+                } else {
+                    (end - start).div_ceil(2).min(BATCH)
+                };
                 let id = q.next_id;
                 q.next_id += 1;
                 let steps: Vec<StepOutput> = q

@@ -58,12 +58,15 @@ enum Values<'a> {
     F64(&'a [f64]),
     U64(&'a [u64]),
     U8(&'a [u8]),
+    /// The shape of a `Float64` array of this many values whose bytes are not given (for the
+    /// layout of what follows it, [`raw_after_point_data`]).
+    Shape(usize),
 }
 
 impl<'a> Values<'a> {
     fn vtk_type(&self) -> &'static str {
         match self {
-            Values::F64(_) => "Float64",
+            Values::F64(_) | Values::Shape(_) => "Float64",
             Values::U64(_) => "UInt64",
             Values::U8(_) => "UInt8",
         }
@@ -74,10 +77,12 @@ impl<'a> Values<'a> {
             Values::F64(v) => 8 * v.len(),
             Values::U64(v) => 8 * v.len(),
             Values::U8(v) => v.len(),
+            Values::Shape(n) => 8 * n,
         }
     }
 
-    /// The values' little-endian bytes: the values' own memory on a little-endian machine.
+    /// The values' little-endian bytes: the values' own memory on a little-endian machine
+    /// (none for a [`Values::Shape`]).
     fn le_bytes(&self) -> Cow<'a, [u8]> {
         #[cfg(target_endian = "little")]
         {
@@ -85,6 +90,7 @@ impl<'a> Values<'a> {
                 Values::F64(v) => Cow::Borrowed(bytemuck::cast_slice(v)),
                 Values::U64(v) => Cow::Borrowed(bytemuck::cast_slice(v)),
                 Values::U8(v) => Cow::Borrowed(v),
+                Values::Shape(_) => Cow::Borrowed(&[]),
             }
         }
         #[cfg(not(target_endian = "little"))]
@@ -93,6 +99,7 @@ impl<'a> Values<'a> {
                 Values::F64(v) => Cow::Owned(v.iter().flat_map(|x| x.to_le_bytes()).collect()),
                 Values::U64(v) => Cow::Owned(v.iter().flat_map(|x| x.to_le_bytes()).collect()),
                 Values::U8(v) => Cow::Borrowed(v),
+                Values::Shape(_) => Cow::Borrowed(&[]),
             }
         }
     }
@@ -195,16 +202,72 @@ pub fn unstructured<'a>(
     cell_data: &'a [Field],
     compress: bool,
 ) -> Encoded<'a> {
-    fn field(f: &Field) -> Array<'_> {
-        Array {
-            name: Some(&f.name),
-            ncomp: f.ncomp,
-            values: Values::F64(&f.values),
-        }
+    encode(topology, point_data.iter().map(field).collect(), cell_data, compress).0
+}
+
+/// The arrays of a [`Field`].
+fn field(f: &Field) -> Array<'_> {
+    Array {
+        name: Some(&f.name),
+        ncomp: f.ncomp,
+        values: Values::F64(&f.values),
     }
+}
+
+/// What follows the point data in a raw (uncompressed) dataset: the same bytes at every step
+/// of a series on one mesh whose point fields keep their names and shapes.
+pub struct AfterPointData<'a> {
+    /// The byte offset in the file where it begins.
+    pub offset: usize,
+    /// The length of the whole file.
+    pub len: usize,
+    parts: Vec<Cow<'a, [u8]>>,
+}
+
+impl AfterPointData<'_> {
+    /// Its byte strings, in order.
+    pub fn parts(&self) -> Vec<&[u8]> {
+        self.parts.iter().map(|p| &p[..]).collect()
+    }
+}
+
+/// The bytes of a raw dataset of [`unstructured`] that follow its point data, whose fields
+/// have the names and component counts `point_shapes` (their values are not needed: only
+/// their sizes set the header and the offsets), and where they begin.
+pub fn raw_after_point_data<'a>(
+    topology: &'a Topology,
+    point_shapes: &[(&'a str, u32)],
+    cell_data: &'a [Field],
+) -> AfterPointData<'a> {
+    let n = topology.n_points();
+    let arrays = point_shapes
+        .iter()
+        .map(|&(name, ncomp)| Array {
+            name: Some(name),
+            ncomp,
+            values: Values::Shape(ncomp as usize * n),
+        })
+        .collect();
+    let (encoded, sizes) = encode(topology, arrays, cell_data, false);
+    let mut parts = encoded.parts.into_iter();
+    let xml = parts.next().expect("the header");
+    // Each raw array is two parts (its byte count, its bytes).
+    let parts: Vec<_> = parts.skip(2 * point_shapes.len()).collect();
+    let offset = xml.len() + sizes[..point_shapes.len()].iter().sum::<usize>();
+    let len = offset + parts.iter().map(|p| p.len()).sum::<usize>();
+    AfterPointData { offset, len, parts }
+}
+
+/// [`unstructured`] of the arrays `point_arrays`, with each array's block size in the
+/// appended section.
+fn encode<'a>(
+    topology: &'a Topology,
+    point_arrays: Vec<Array<'a>>,
+    cell_data: &'a [Field],
+    compress: bool,
+) -> (Encoded<'a>, Vec<usize>) {
     // The arrays in the order of the XML header, which is also their order in the appended
     // section.
-    let point_arrays: Vec<Array> = point_data.iter().map(field).collect();
     let cell_arrays: Vec<Array> = cell_data.iter().map(field).collect();
     let points_array = Array {
         name: None,
@@ -308,5 +371,35 @@ pub fn unstructured<'a>(
     parts.push(Cow::Owned(xml.into_bytes()));
     parts.extend(blocks);
     parts.push(Cow::Borrowed(tail.as_bytes()));
-    Encoded { parts }
+    (Encoded { parts }, sizes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What [`raw_after_point_data`] gives from the fields' names and shapes alone is the
+    /// file [`unstructured`] writes with their values, from its offset on.
+    #[test]
+    fn the_bytes_after_the_point_data_are_those_of_the_whole_file() {
+        let points = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.0], [0.5, 0.5], [0.0, 0.5]];
+        let topology = Topology::new(&points, &[[0usize, 1, 2, 3, 4, 5]], Kind::Tri6);
+        let values = |k: usize, n: usize| (0..n).map(|i| (i * 7 + k) as f64 * 0.25).collect();
+        let point_data = [
+            Field::vector("displacement", values(1, 18)),
+            Field::scalar("p & <q>", values(2, 6)),
+        ];
+        let cell_data = [Field::scalar("body_id", vec![1.0])];
+        let whole = unstructured(&topology, &point_data, &cell_data, false).to_vec();
+        let after = raw_after_point_data(
+            &topology,
+            &[("displacement", 3), ("p & <q>", 1)],
+            &cell_data,
+        );
+        assert_eq!(after.len, whole.len());
+        assert_eq!(after.parts().concat(), whole[after.offset..]);
+        // The header and the point fields come before it.
+        let header = whole.windows(4).position(|w| w == b"   _").unwrap() + 4;
+        assert_eq!(after.offset, header + 2 * 8 + (18 + 6) * 8);
+    }
 }
