@@ -28,7 +28,11 @@ fn main() {
             let w = layout.begin[s + 1] - layout.begin[s];
             hist[((usize::BITS - w.leading_zeros()) as usize - 1).min(13)] += 1;
         }
-        println!("supernodes: {}, by width 1, 2-3, 4-7, ... (the last from 8192 up): {:?}", layout.begin.len() - 1, hist);
+        println!(
+            "supernodes: {}, by width 1, 2-3, 4-7, ... (the last from 8192 up): {:?}",
+            layout.begin.len() - 1,
+            hist
+        );
         println!(
             "factor values: {} MB, of which the K̂ solves read {} MB ({:.0} %)",
             total * 8 / 1_000_000,

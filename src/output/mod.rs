@@ -211,7 +211,12 @@ mod direct {
     }
 
     #[cfg(not(target_os = "linux"))]
-    pub fn copy_out(_: &mut std::fs::File, _: &[&[u8]], _: usize, _: usize) -> std::io::Result<bool> {
+    pub fn copy_out(
+        _: &mut std::fs::File,
+        _: &[&[u8]],
+        _: usize,
+        _: usize,
+    ) -> std::io::Result<bool> {
         Ok(false)
     }
 
@@ -673,12 +678,20 @@ mod tests {
             }
             if let Some(a) = write_ahead(&path, len, 5_000, &tail_of(5_000)).unwrap() {
                 drop(a);
-                assert_eq!(names_in(&dir), ["big.vtu"], "a file dropped unfinished is removed");
+                assert_eq!(
+                    names_in(&dir),
+                    ["big.vtu"],
+                    "a file dropped unfinished is removed"
+                );
             }
             if let Some(a) = write_ahead(&path, len, 5_000, &tail_of(5_000)).unwrap() {
                 let err = finish_ahead(a, &parts[1..]).unwrap_err();
                 assert!(err.to_string().contains("were planned"), "{err}");
-                assert_eq!(names_in(&dir), ["big.vtu"], "a file not finished is removed");
+                assert_eq!(
+                    names_in(&dir),
+                    ["big.vtu"],
+                    "a file not finished is removed"
+                );
             }
             assert!(std::fs::read(&path).unwrap() == bytes);
             std::fs::remove_dir_all(&dir).unwrap();

@@ -232,7 +232,12 @@ impl Bodies<'_> {
                 .map(write)
                 .collect()
         } else {
-            steps.iter().zip(&point_data).zip(ahead).map(write).collect()
+            steps
+                .iter()
+                .zip(&point_data)
+                .zip(ahead)
+                .map(write)
+                .collect()
         };
         crate::trace::mark("bodies files prepared");
         Prepared {
