@@ -30,5 +30,6 @@ pub mod report;
 pub mod restart;
 pub mod run;
 pub mod shapes;
+pub mod simd;
 pub mod sweep;
 pub mod trace;
