@@ -527,10 +527,20 @@ mod tests {
         names
     }
 
-    /// A file of several chunks and a ragged end, in parts that straddle the chunks, written
-    /// through `O_DIRECT` (a disk-backed temporary directory) and through `/dev/shm` (tmpfs,
-    /// which may refuse the flag: the buffered path), reads back byte for byte, and leaves no
-    /// temporary file.
+    /// Directories for a test's files, named by `tag` and this process: in the temporary
+    /// directory (disk-backed: `O_DIRECT`) and in `/dev/shm` where there is one (tmpfs, which
+    /// may refuse the flag: the buffered path).
+    fn scratch_dirs(tag: &str) -> Vec<PathBuf> {
+        let name = format!("stickslip-{tag}-{}", std::process::id());
+        let mut dirs = vec![std::env::temp_dir().join(&name)];
+        if Path::new("/dev/shm").is_dir() {
+            dirs.push(Path::new("/dev/shm").join(&name));
+        }
+        dirs
+    }
+
+    /// Files renamed over others through the reaper replace them, a missing temporary file is
+    /// an error that keeps the file it would replace, and nothing else is left.
     #[test]
     fn the_reaper_replaces_files_and_leaves_nothing_else() {
         let dir = std::env::temp_dir().join(format!("stickslip-reaper-{}", std::process::id()));
@@ -584,6 +594,10 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
+    /// A file of several chunks and a ragged end, in parts that straddle the chunks, written
+    /// through `O_DIRECT` (a disk-backed temporary directory) and through `/dev/shm` (tmpfs,
+    /// which may refuse the flag: the buffered path), reads back byte for byte, and leaves no
+    /// temporary file.
     #[test]
     fn large_files_read_back_as_written() {
         let bytes: Vec<u8> = (0..(9 << 20) + 4_321u32)
@@ -594,14 +608,7 @@ mod tests {
             &bytes[17..(5 << 20) + 3],
             &bytes[(5 << 20) + 3..],
         ];
-        let mut dirs =
-            vec![std::env::temp_dir().join(format!("stickslip-direct-{}", std::process::id()))];
-        if Path::new("/dev/shm").is_dir() {
-            dirs.push(PathBuf::from(format!(
-                "/dev/shm/stickslip-direct-{}",
-                std::process::id()
-            )));
-        }
+        let dirs = scratch_dirs("direct");
         for dir in dirs {
             std::fs::create_dir_all(&dir).unwrap();
             let path = dir.join("big.vtu");
@@ -645,14 +652,7 @@ mod tests {
             }
             rest
         };
-        let mut dirs =
-            vec![std::env::temp_dir().join(format!("stickslip-ahead-{}", std::process::id()))];
-        if Path::new("/dev/shm").is_dir() {
-            dirs.push(PathBuf::from(format!(
-                "/dev/shm/stickslip-ahead-{}",
-                std::process::id()
-            )));
-        }
+        let dirs = scratch_dirs("ahead");
         for dir in dirs {
             std::fs::create_dir_all(&dir).unwrap();
             let path = dir.join("big.vtu");

@@ -388,14 +388,8 @@ mod tests {
     /// file [`unstructured`] writes with their values, from its offset on.
     #[test]
     fn the_bytes_after_the_point_data_are_those_of_the_whole_file() {
-        let points = [
-            [0.0, 0.0],
-            [1.0, 0.0],
-            [0.0, 1.0],
-            [0.5, 0.0],
-            [0.5, 0.5],
-            [0.0, 0.5],
-        ];
+        // One reference triangle.
+        let points = crate::shapes::tri6::NODE_REF_COORDS;
         let topology = Topology::new(&points, &[[0usize, 1, 2, 3, 4, 5]], Kind::Tri6);
         let values = |k: usize, n: usize| (0..n).map(|i| (i * 7 + k) as f64 * 0.25).collect();
         let point_data = [
