@@ -217,11 +217,12 @@ impl Bodies<'_> {
                 .to_string_lossy()
                 .into_owned();
             let parts = bodies_vtu(mesh, data, compress);
-            let tmp = match ahead {
-                Some(a) => super::finish_ahead(a, &parts.parts()),
-                None => super::write_temporary(&path, &parts.parts()),
-            }
-            .map_err(|source| write_error(&path, source))?;
+            // A file begun ahead that cannot be finished (its temporary removed) is written
+            // whole: any error of that write is the file's.
+            let tmp = ahead
+                .and_then(|a| super::finish_ahead(a, &parts.parts()).ok())
+                .map_or_else(|| super::write_temporary(&path, &parts.parts()), Ok)
+                .map_err(|source| write_error(&path, source))?;
             Ok((tmp, name))
         };
         let bodies = if spread {

@@ -126,6 +126,10 @@ fn escape(s: &str) -> String {
 /// The bytes of one compressed array in the appended section: the one-block header
 /// `[1, n, n, compressed n]` (no blocks for no bytes) and the zlib stream.
 fn zlib_block(values: &Values) -> Vec<u8> {
+    assert!(
+        !matches!(values, Values::Shape(_)),
+        "an array without values is not compressed"
+    );
     let n = values.byte_len();
     if n == 0 {
         // No blocks.
