@@ -3,7 +3,8 @@
 # alternating runs so that the machine's drift falls on both alike; prints the median and the
 # minimum process wall time of each and the median of the per-pair ratios B/A, then each side's
 # wall time against its own floor (`timings_s.build_span` of the run's summary.json: the
-# assembly, analysis and factorisation as they ran) and what the run spent beyond it.
+# assembly, analysis and factorisation as they ran) and what the run spent beyond it, and each
+# side's numeric factorisation times (`timings_s.factorise`), sorted.
 #
 #   benches/ab.sh N BIN_A BIN_B [CASE] [cold|warm] [ENV_A] [ENV_B]
 #
@@ -42,11 +43,13 @@ run() { # side bin env
   # disk before the next run starts, outside the timed span, as in the scaling bench: else the
   # kernel's writeback of one side's entry runs during the other side's floor.
   sync
-  # The wall time, and the run's floor (`timings_s.build_span` of its summary; 0 if none).
+  # The wall time, the run's floor (`timings_s.build_span` of its summary; 0 if none) and its
+  # numeric factorisation (`timings_s.factorise`).
   local floor
   floor=$(python3 -c 'import json,sys
-try: print(json.load(open(sys.argv[1]))["timings_s"]["build_span"])
-except Exception: print(0)' "$work/out_$1/summary.json")
+try:
+    t = json.load(open(sys.argv[1]))["timings_s"]; print("%s,%s" % (t["build_span"], t["factorise"]))
+except Exception: print("0,0")' "$work/out_$1/summary.json")
   echo "$(( (t1 - t0) / 1000 ))e-6,$floor"
 }
 if [ "$MODE" = warm ]; then run A "$A" "$EA" >/dev/null; run B "$B" "$EB" >/dev/null; fi
@@ -63,5 +66,8 @@ if all(x[1] > 0 and y[1] > 0 for x, y in r):
     for side, k in (("A", 0), ("B", 1)):
         v = [p[k] for p in r]
         print("%s: wall / floor median %.3f (%s), wall - floor median %.3f s"
-              % (side, st.median([w / f for w, f in v]), " ".join("%.2f" % (w / f) for w, f in v),
-                 st.median([w - f for w, f in v])))'
+              % (side, st.median([w / f for w, f, _ in v]), " ".join("%.2f" % (w / f) for w, f, _ in v),
+                 st.median([w - f for w, f, _ in v])))
+    # The numeric factorisation of each run, sorted (its slow outliers move the floor).
+    for side, k in (("A", 0), ("B", 1)):
+        print("%s: factorise s, sorted: %s" % (side, " ".join("%.2f" % p[k][2] for p in sorted(r, key=lambda p: p[k][2]))))'

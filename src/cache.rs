@@ -651,14 +651,6 @@ impl Draft {
         if !reserves_blocks(&draft_file.file) || !reserve(&draft_file.file, bytes) {
             return None;
         }
-        // The reservation committed before the factorisation writes the pages: without it,
-        // the first L7 factorisation of a run that computes its values here took 1.85–2.5 s
-        // in 9 of 22 runs (1.42–1.67 s in the others), with it in 4 of 22, the file
-        // system's journal commit apparently falling on the factorisation's page faults
-        // (docs/benchmarks.md, the sixteenth session). A failure changes nothing else.
-        crate::trace::mark("cache draft: blocks reserved");
-        let _ = draft_file.file.sync_all();
-        crate::trace::mark("cache draft: reservation synced");
         // SAFETY: a file this process just created (`create_new`) under a name of its own;
         // see `Reader::map_next` on files changed by other programs while mapped.
         let map = unsafe {

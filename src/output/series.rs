@@ -113,7 +113,10 @@ impl Bodies<'_> {
     fn prepare(&self, steps: Vec<StepOutput>, spread: bool) -> Prepared {
         std::thread::scope(|scope| {
             let ahead = (!self.compress).then(|| {
-                let names: Vec<PathBuf> = steps.iter().map(|s| self.bodies_path(s)).collect();
+                let names: Vec<PathBuf> = steps
+                    .iter()
+                    .map(|s| self.dir.join(self.bodies_name(s)))
+                    .collect();
                 std::thread::Builder::new()
                     .name("stickslip-ahead".into())
                     .spawn_scoped(scope, move || self.write_ahead(&names))
@@ -123,13 +126,14 @@ impl Bodies<'_> {
                 ahead
                     .flatten()
                     .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+                    .unwrap_or_default()
             })
         })
     }
 
-    /// The path of a step's bodies dataset.
-    fn bodies_path(&self, s: &StepOutput) -> PathBuf {
-        self.dir.join(format!("{}_{:04}.vtu", self.stem, s.step))
+    /// The file name of a step's bodies dataset.
+    fn bodies_name(&self, s: &StepOutput) -> String {
+        format!("{}_{:04}.vtu", self.stem, s.step)
     }
 
     /// The step-independent bytes of the bodies datasets `paths`, written ahead to their
@@ -150,12 +154,13 @@ impl Bodies<'_> {
             .collect()
     }
 
-    /// [`Self::prepare`] with the files begun ahead that `ahead` waits for.
+    /// [`Self::prepare`] with the files begun ahead that `ahead` waits for (per step, none
+    /// where not begun; none at all without a thread writing ahead).
     fn prepare_with(
         &self,
         steps: Vec<StepOutput>,
         spread: bool,
-        ahead: impl FnOnce() -> Option<Vec<Option<super::Ahead>>>,
+        ahead: impl FnOnce() -> Vec<Option<super::Ahead>>,
     ) -> Prepared {
         use rayon::prelude::*;
         let t = Instant::now();
@@ -207,15 +212,11 @@ impl Bodies<'_> {
         crate::trace::mark("point fields");
         let mesh = self.mesh.get_or_init(|| BodiesMesh::new(model));
         let compress = self.compress;
-        let mut ahead = ahead().unwrap_or_default();
+        let mut ahead = ahead();
         ahead.resize_with(steps.len(), || None);
         let write = |((s, data), ahead): ((&StepOutput, &Vec<Field>), Option<super::Ahead>)| {
-            let path = self.bodies_path(s);
-            let name = path
-                .file_name()
-                .expect("a file name")
-                .to_string_lossy()
-                .into_owned();
+            let name = self.bodies_name(s);
+            let path = self.dir.join(&name);
             let parts = bodies_vtu(mesh, data, compress);
             // A file begun ahead that cannot be finished (its temporary removed) is written
             // whole: any error of that write is the file's.
