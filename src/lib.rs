@@ -31,5 +31,6 @@ pub mod restart;
 pub mod run;
 pub mod shapes;
 pub mod simd;
+pub mod supernodal;
 pub mod sweep;
 pub mod trace;

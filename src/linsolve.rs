@@ -32,6 +32,14 @@ fn sym<'a>(
     SymbolicSparseColMatRef::new_checked(n, n, &col_ptr[..=n], None, &row_idx[..col_ptr[n]])
 }
 
+/// Whether the saddle-point factorisations run on the elimination tree's schedule
+/// ([`crate::supernodal`]): where its kernel is available, unless `STICKSLIP_FACTOR=faer`
+/// asks for faer's own loop (the same bits; for comparisons).
+pub fn tree_scheduled() -> bool {
+    crate::supernodal::available()
+        && std::env::var("STICKSLIP_FACTOR").map_or(true, |v| v != "faer")
+}
+
 /// The parallelism of the sparse numeric factorisations and of the product that forms the
 /// Delassus operator: all of rayon's threads. Their results do not depend on the number of
 /// threads (`tests/determinism.rs`), unlike some of faer's dense kernels, which the program
@@ -670,7 +678,19 @@ impl SaddleSymbolic {
         &self,
         k_values: &[f64],
         y_rows: &[Vec<(usize, f64)>],
+        dest: Option<crate::cache::WritableSection>,
+    ) -> Result<SaddleFactor, FactorError> {
+        self.factorise_using(k_values, y_rows, dest, tree_scheduled())
+    }
+
+    /// [`Self::factorise_in`] on the elimination tree's schedule with `tree`, else with
+    /// faer's own loop.
+    fn factorise_using(
+        &self,
+        k_values: &[f64],
+        y_rows: &[Vec<(usize, f64)>],
         mut dest: Option<crate::cache::WritableSection>,
+        tree: bool,
     ) -> Result<SaddleFactor, FactorError> {
         use faer::dyn_stack::{MemBuffer, MemStack};
         let (n, m) = (self.n, self.m);
@@ -695,6 +715,7 @@ impl SaddleSymbolic {
                 .is_none_or(|d| d.len() == self.inner.len_val()),
             "a factor's destination of another length"
         );
+        crate::trace::mark("factor: values gathered");
         let mut owned = Vec::new();
         let l: &mut [f64] = match &mut dest {
             Some(d) => {
@@ -709,29 +730,49 @@ impl SaddleSymbolic {
                 &mut owned
             }
         };
-        let mut mem = MemBuffer::try_new(
-            self.inner
-                .factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
-        )
-        .map_err(|_| FactorError::OutOfMemory {
-            what: "the numeric factorisation",
-            n: size,
-        })?;
-        self.inner
-            .factorize_numeric_ldlt(
-                l,
-                a,
-                Side::Upper,
-                Default::default(),
-                par,
-                MemStack::new(&mut mem),
-                Default::default(),
+        crate::trace::mark("factor: values cleared");
+        if tree {
+            let lower = crate::supernodal::LowerCsc::permuted(
+                &self.col_ptr,
+                &self.row_idx,
+                &values,
+                &self.layout.fwd,
+            );
+            drop(values);
+            crate::trace::mark("factor: lower triangle permuted");
+            let st = crate::supernodal::Structure {
+                begin: &self.layout.begin,
+                row_ptr: &self.layout.row_ptr,
+                rows: &self.layout.rows,
+                val_ptr: &self.layout.val_ptr,
+            };
+            crate::supernodal::factorise(&st, &lower, l, par)
+                .map_err(|pivot| FactorError::NotPositiveDefinite { pivot, n })?;
+        } else {
+            let mut mem = MemBuffer::try_new(
+                self.inner
+                    .factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
             )
-            .map_err(|e| match e {
-                faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } => {
-                    FactorError::NotPositiveDefinite { pivot: index, n }
-                }
+            .map_err(|_| FactorError::OutOfMemory {
+                what: "the numeric factorisation",
+                n: size,
             })?;
+            self.inner
+                .factorize_numeric_ldlt(
+                    l,
+                    a,
+                    Side::Upper,
+                    Default::default(),
+                    par,
+                    MemStack::new(&mut mem),
+                    Default::default(),
+                )
+                .map_err(|e| match e {
+                    faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } => {
+                        FactorError::NotPositiveDefinite { pivot: index, n }
+                    }
+                })?;
+        }
         let values = match dest {
             Some(d) => FactorValues::Mapped(d.into_mapped()),
             None => FactorValues::Owned(owned),
@@ -1452,6 +1493,74 @@ mod tests {
         // A value array of another length is refused.
         let short = std::sync::Arc::new(FactorValues::Owned(vec![0.0; layout.len_val() - 1]));
         assert!(SaddleFactor::from_layout(layout.clone(), short, n, y.len()).is_err());
+    }
+
+    /// The factorisation on the elimination tree's schedule (`crate::supernodal`) gives
+    /// faer's factor bit for bit, on one, two or three threads: a 2-D grid ordered by nested
+    /// dissection (independent subtrees under the top separators) with 120 constraint rows,
+    /// whose dense block takes the updates split over its columns.
+    #[test]
+    fn the_tree_scheduled_factor_is_faers_bit_for_bit() {
+        if !crate::supernodal::available() {
+            eprintln!("no AVX2 and FMA here: faer's loop is the only one");
+            return;
+        }
+        let side = 70;
+        let n = side * side;
+        let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
+        for j in 0..n {
+            let (r, c) = (j / side, j % side);
+            if r > 0 {
+                row_idx.push(j - side);
+                values.push(-1.0 - 0.003 * (j % 11) as f64);
+            }
+            if c > 0 {
+                row_idx.push(j - 1);
+                values.push(-1.0 - 0.01 * (j % 7) as f64);
+            }
+            row_idx.push(j);
+            values.push(4.5 + 0.001 * (j % 5) as f64);
+            col_ptr.push(row_idx.len());
+        }
+        let y: Vec<Vec<(usize, f64)>> = (0..120)
+            .map(|i| vec![(40 * i, 1.0), (40 * i + 1, -0.3 - 0.001 * i as f64)])
+            .collect();
+        let fwd = crate::ordering::nested_dissection(n, &col_ptr, &row_idx);
+        let sym = SaddleSymbolic::with_ordering(n, &col_ptr, &row_idx, &y, &fwd).unwrap();
+        let lay = &sym.layout;
+        let st = crate::supernodal::Structure {
+            begin: &lay.begin,
+            row_ptr: &lay.row_ptr,
+            rows: &lay.rows,
+            val_ptr: &lay.val_ptr,
+        };
+        let (subtrees, top, widest) = crate::supernodal::schedule_shape(&st);
+        assert!(
+            subtrees >= 4 && top >= 2,
+            "{subtrees} subtrees, {top} top supernodes"
+        );
+        assert!(
+            widest >= crate::supernodal::SPLIT_COLUMNS,
+            "widest top {widest}"
+        );
+        let pool = |k| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(k)
+                .build()
+                .unwrap()
+        };
+        let bits = |k: usize, tree: bool| -> Vec<u64> {
+            let f = pool(k)
+                .install(|| sym.factorise_using(&values, &y, None, tree))
+                .unwrap();
+            f.values().iter().map(|v| v.to_bits()).collect()
+        };
+        let faer = bits(1, false);
+        assert!(faer.iter().any(|&b| f64::from_bits(b) != 0.0));
+        for k in [1, 2, 3] {
+            assert!(bits(k, true) == faer, "{k} threads: not faer's bits");
+        }
+        assert!(bits(2, false) == faer, "faer's loop on 2 threads");
     }
 
     /// The sweeps compiled for AVX2 give the baseline's bits (and solve the system), on a 2-D

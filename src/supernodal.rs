@@ -1,0 +1,633 @@
+//! The numeric `L D Lᵀ` of a supernodal analysis (the saddle-point matrix of a contact model),
+//! left-looking as faer's `factorize_supernodal_numeric_ldlt`, with the same kernels and the
+//! same order of operations on every value, but scheduled on rayon's threads by the
+//! elimination tree:
+//!
+//! * **independent subtrees** of the supernodal elimination tree (a nested-dissection
+//!   ordering gives many) are factorised at the same time, each on one thread with sequential
+//!   kernels;
+//! * **the supernodes above them** (the top separators and the dense block of the constraint
+//!   rows) are factorised in turn; the updates from their descendants are applied on all
+//!   threads by splitting the supernode's columns, each element still receiving the
+//!   descendants' updates one after the other in the same order; their dense `L D Lᵀ` and
+//!   triangular solve use faer's parallel kernels.
+//!
+//! faer's own loop takes the supernodes one after the other and parallelises inside each
+//! update: on the L5–L7 ladders most updates are small (supernodes of 2–7 columns), and the
+//! synchronisation of each of them cost more than it gained (the 2-thread numeric
+//! factorisation at L5 was no faster than the 1-thread one, with ~180 000 futex calls at L7).
+//!
+//! The values are those of faer's loop with sequential kernels, bit for bit
+//! (`tests::the_factor_is_faers_bit_for_bit`), and do not depend on the number of threads:
+//! the partition into subtrees is fixed by the tree alone, and every update is a sequential
+//! kernel call on its own columns.
+//!
+//! Only on x86-64 with AVX2 and FMA, where faer's gather-scatter update kernel (the
+//! `private-gemm-x86` crate, pinned to faer's version) is what faer itself runs
+//! ([`available`]); elsewhere the caller keeps faer's loop.
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::reborrow::{Reborrow, ReborrowMut};
+use faer::{MatMut, Par};
+
+/// A symmetric matrix's lower triangle in compressed columns, in the factor's (permuted)
+/// numbering, as the factorisation reads it.
+pub struct LowerCsc {
+    pub col_ptr: Vec<usize>,
+    pub row_idx: Vec<u32>,
+    pub values: Vec<f64>,
+}
+
+impl LowerCsc {
+    /// The lower triangle of `P A Pᵀ` from the upper triangle of `A` in compressed columns
+    /// (`col_ptr`, `row_idx`, `values`; entries below the diagonal are ignored), where
+    /// `fwd[new] = old`.
+    pub fn permuted(col_ptr: &[usize], row_idx: &[usize], values: &[f64], fwd: &[usize]) -> Self {
+        let size = fwd.len();
+        let mut inv = vec![0u32; size];
+        for (new, &old) in fwd.iter().enumerate() {
+            inv[old] = new as u32;
+        }
+        let place = |r: usize, c: usize| {
+            let (pr, pc) = (inv[r], inv[c]);
+            if pr >= pc { (pc, pr) } else { (pr, pc) }
+        };
+        let mut ptr = vec![0usize; size + 1];
+        for c in 0..size {
+            for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
+                if r <= c {
+                    ptr[place(r, c).0 as usize + 1] += 1;
+                }
+            }
+        }
+        for j in 0..size {
+            ptr[j + 1] += ptr[j];
+        }
+        let nnz = ptr[size];
+        let mut next = ptr[..size].to_vec();
+        let mut rows = vec![0u32; nnz];
+        let mut vals = vec![0.0; nnz];
+        for c in 0..size {
+            for p in col_ptr[c]..col_ptr[c + 1] {
+                let r = row_idx[p];
+                if r <= c {
+                    let (col, row) = place(r, c);
+                    let q = next[col as usize];
+                    next[col as usize] += 1;
+                    rows[q] = row;
+                    vals[q] = values[p];
+                }
+            }
+        }
+        LowerCsc {
+            col_ptr: ptr,
+            row_idx: rows,
+            values: vals,
+        }
+    }
+}
+
+/// The supernodal structure the factorisation needs: supernode `s` has the columns
+/// `begin[s]..begin[s + 1]`, the off-diagonal rows `rows[row_ptr[s]..row_ptr[s + 1]]`
+/// (ascending) and its values at `val_ptr[s]..` (column-major, its own rows then the others).
+pub struct Structure<'a> {
+    pub begin: &'a [usize],
+    pub row_ptr: &'a [usize],
+    pub rows: &'a [usize],
+    pub val_ptr: &'a [usize],
+}
+
+impl Structure<'_> {
+    fn n_supernodes(&self) -> usize {
+        self.begin.len() - 1
+    }
+
+    fn pattern(&self, s: usize) -> &[usize] {
+        &self.rows[self.row_ptr[s]..self.row_ptr[s + 1]]
+    }
+
+    fn ncols(&self, s: usize) -> usize {
+        self.begin[s + 1] - self.begin[s]
+    }
+}
+
+/// Whether this machine runs faer's gather-scatter update kernel (x86-64 with AVX2 and FMA),
+/// and so this factorisation.
+pub fn available() -> bool {
+    instruction_set().is_some()
+}
+
+#[cfg(target_arch = "x86_64")]
+fn instruction_set() -> Option<private_gemm_x86::InstrSet> {
+    // The choice faer makes (`linalg::matmul::internal::spicy_matmul`).
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        Some(private_gemm_x86::InstrSet::Avx512)
+    } else if std::arch::is_x86_feature_detected!("avx2")
+        && std::arch::is_x86_feature_detected!("fma")
+    {
+        Some(private_gemm_x86::InstrSet::Avx256)
+    } else {
+        None
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn instruction_set() -> Option<()> {
+    None
+}
+
+/// The elimination tree's schedule: the descendants that update each supernode, the
+/// independent subtrees and the supernodes above them.
+struct Schedule {
+    /// Per supernode, the supernodes whose rows reach into its columns (ascending).
+    desc_ptr: Vec<usize>,
+    desc: Vec<u32>,
+    /// Disjoint subtrees (their supernodes ascending), the largest first.
+    subtrees: Vec<Vec<usize>>,
+    /// The supernodes in no subtree, ascending.
+    top: Vec<usize>,
+}
+
+/// Subtrees are split until none has more than this share of the tree's work (a fixed share,
+/// so that the schedule, like the values, does not depend on the number of threads).
+const SPLIT_SHARE: f64 = 1.0 / 16.0;
+
+/// A top supernode's updates are split over its columns from this many columns.
+pub const SPLIT_COLUMNS: usize = 32;
+
+impl Schedule {
+    fn of(st: &Structure) -> Schedule {
+        let nsup = st.n_supernodes();
+        let size = *st.begin.last().unwrap_or(&0);
+        let mut sn_of = vec![0u32; size];
+        for s in 0..nsup {
+            sn_of[st.begin[s]..st.begin[s + 1]].fill(s as u32);
+        }
+        // Descendants per supernode, by counting (d ascending, so each list is ascending).
+        let targets = |d: usize, f: &mut dyn FnMut(usize)| {
+            let mut last = u32::MAX;
+            for &r in st.pattern(d) {
+                let s = sn_of[r];
+                if s != last {
+                    f(s as usize);
+                    last = s;
+                }
+            }
+        };
+        let mut desc_ptr = vec![0usize; nsup + 1];
+        for d in 0..nsup {
+            targets(d, &mut |s| desc_ptr[s + 1] += 1);
+        }
+        for s in 0..nsup {
+            desc_ptr[s + 1] += desc_ptr[s];
+        }
+        let mut next = desc_ptr[..nsup].to_vec();
+        let mut desc = vec![0u32; desc_ptr[nsup]];
+        for d in 0..nsup {
+            targets(d, &mut |s| {
+                desc[next[s]] = d as u32;
+                next[s] += 1;
+            });
+        }
+        // The tree (a supernode's parent holds its first off-diagonal row) and its work.
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); nsup];
+        let mut roots = Vec::new();
+        let mut work = vec![0.0f64; nsup];
+        for s in 0..nsup {
+            let (w, p) = (st.ncols(s) as f64, st.pattern(s).len() as f64);
+            work[s] += w * w * w / 3.0 + w * w * p + w * p * p + 1.0;
+            match st.pattern(s).first() {
+                Some(&r) => {
+                    let parent = sn_of[r] as usize;
+                    work[parent] += work[s];
+                    children[parent].push(s);
+                }
+                None => roots.push(s),
+            }
+        }
+        let total: f64 = roots.iter().map(|&s| work[s]).sum();
+        // Split the largest subtree until every one is at most a share of the whole.
+        let mut open: Vec<usize> = roots;
+        let mut top = Vec::new();
+        while let Some((i, &s)) = open
+            .iter()
+            .enumerate()
+            .max_by(|a, b| work[*a.1].total_cmp(&work[*b.1]).then(b.1.cmp(a.1)))
+            .filter(|(_, s)| work[**s] > SPLIT_SHARE * total)
+        {
+            open.swap_remove(i);
+            top.push(s);
+            open.extend_from_slice(&children[s]);
+        }
+        open.sort_by(|&a, &b| work[b].total_cmp(&work[a]).then(a.cmp(&b)));
+        let subtrees = open
+            .iter()
+            .map(|&root| {
+                let mut nodes = Vec::new();
+                let mut stack = vec![root];
+                while let Some(s) = stack.pop() {
+                    nodes.push(s);
+                    stack.extend_from_slice(&children[s]);
+                }
+                nodes.sort_unstable();
+                nodes
+            })
+            .collect();
+        top.sort_unstable();
+        Schedule {
+            desc_ptr,
+            desc,
+            subtrees,
+            top,
+        }
+    }
+
+    fn descendants(&self, s: usize) -> &[u32] {
+        &self.desc[self.desc_ptr[s]..self.desc_ptr[s + 1]]
+    }
+}
+
+/// The shape of the schedule of `st` (for tests): the number of subtrees, the number of top
+/// supernodes and the widest top supernode's columns.
+pub fn schedule_shape(st: &Structure) -> (usize, usize, usize) {
+    let sc = Schedule::of(st);
+    let widest = sc.top.iter().map(|&s| st.ncols(s)).max().unwrap_or(0);
+    (sc.subtrees.len(), sc.top.len(), widest)
+}
+
+/// The factor's values, written by several tasks at once: each writes only the values of the
+/// supernodes it factorises, and reads only those of finished ones.
+struct Values {
+    ptr: *mut f64,
+    len: usize,
+}
+
+// SAFETY: see `Values`; the schedule gives every supernode to one task, after all of its
+// descendants are finished.
+unsafe impl Sync for Values {}
+unsafe impl Send for Values {}
+
+impl Values {
+    /// The values `range`.
+    ///
+    /// # Safety
+    /// No other task writes them while the slice lives.
+    unsafe fn get(&self, range: std::ops::Range<usize>) -> &[f64] {
+        assert!(range.start <= range.end && range.end <= self.len);
+        unsafe { std::slice::from_raw_parts(self.ptr.add(range.start), range.len()) }
+    }
+
+    /// The values `range`, to write.
+    ///
+    /// # Safety
+    /// No other task reads or writes them while the slice lives.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn get_mut(&self, range: std::ops::Range<usize>) -> &mut [f64] {
+        assert!(range.start <= range.end && range.end <= self.len);
+        unsafe { std::slice::from_raw_parts_mut(self.ptr.add(range.start), range.len()) }
+    }
+}
+
+/// One thread's working arrays: the local row of each row of the supernode being factorised,
+/// the index lists of one update and the dense factorisation's scratch.
+struct Work {
+    local: Vec<usize>,
+    row_idx: Vec<usize>,
+    col_idx: Vec<usize>,
+    mem: MemBuffer,
+}
+
+impl Work {
+    fn new(size: usize, max_cols: usize, par: Par) -> Work {
+        let req = faer::linalg::cholesky::ldlt::factor::cholesky_in_place_scratch::<f64>(
+            max_cols,
+            par,
+            Default::default(),
+        );
+        Work {
+            local: vec![usize::MAX; size],
+            row_idx: Vec::new(),
+            col_idx: Vec::new(),
+            mem: MemBuffer::new(req),
+        }
+    }
+}
+
+/// The numeric factorisation of `a` (its lower triangle in the factor's numbering) into `l`
+/// (zeros on entry, [`Structure::val_ptr`]'s last length): `Err(column)` at a zero pivot,
+/// as faer reports it. `par` is the parallelism of the top supernodes' dense kernels; the
+/// subtrees and the updates use all of rayon's threads.
+///
+/// # Panics
+/// Where [`available`] is false.
+pub fn factorise(st: &Structure, a: &LowerCsc, l: &mut [f64], par: Par) -> Result<(), usize> {
+    use rayon::prelude::*;
+    assert!(
+        available(),
+        "the supernodal update kernel needs AVX2 and FMA"
+    );
+    let nsup = st.n_supernodes();
+    let size = *st.begin.last().unwrap_or(&0);
+    assert_eq!(l.len(), *st.val_ptr.last().unwrap_or(&0));
+    assert_eq!(a.col_ptr.len(), size + 1);
+    let schedule = Schedule::of(st);
+    let max_cols = (0..nsup).map(|s| st.ncols(s)).max().unwrap_or(0);
+    let values = Values {
+        ptr: l.as_mut_ptr(),
+        len: l.len(),
+    };
+    // One set of working arrays per thread (the row map alone is 8 bytes per row).
+    let works: Vec<std::sync::Mutex<Work>> = (0..rayon::current_num_threads().max(1))
+        .map(|_| std::sync::Mutex::new(Work::new(size, max_cols, Par::Seq)))
+        .collect();
+    // The subtrees, each on one thread; the first failure by supernode is the one reported.
+    let failed = schedule
+        .subtrees
+        .par_iter()
+        .map(|nodes| {
+            let i = rayon::current_thread_index().unwrap_or(0) % works.len();
+            let mut work = works[i].lock().unwrap_or_else(|e| e.into_inner());
+            for &s in nodes {
+                // SAFETY: this task alone factorises the subtree's supernodes, whose
+                // descendants are in the subtree and earlier in `nodes`.
+                unsafe { supernode(st, a, &schedule, &values, s, &mut work, Par::Seq, false)? };
+            }
+            Ok(())
+        })
+        .filter_map(Result::err)
+        .min();
+    if let Some(column) = failed {
+        return Err(column);
+    }
+    drop(works);
+    crate::trace::mark(format_args!(
+        "factor: {} subtrees, then {} top supernodes",
+        schedule.subtrees.len(),
+        schedule.top.len()
+    ));
+    let mut work = Work::new(size, max_cols, par);
+    for &s in &schedule.top {
+        // SAFETY: the top supernodes one after the other, after every subtree.
+        unsafe { supernode(st, a, &schedule, &values, s, &mut work, par, true)? };
+    }
+    Ok(())
+}
+
+/// Factorises supernode `s`: its columns of `a`, the updates of its descendants in ascending
+/// order, its dense `L D Lᵀ`, the solve of its off-diagonal rows and their scaling by `D⁻¹`.
+/// With `split`, the updates are applied on rayon's threads, each on a range of the columns.
+///
+/// # Safety
+/// Every descendant of `s` is factorised, and no other task touches `s`'s values or reads
+/// them.
+#[allow(clippy::too_many_arguments)]
+unsafe fn supernode(
+    st: &Structure,
+    a: &LowerCsc,
+    schedule: &Schedule,
+    values: &Values,
+    s: usize,
+    work: &mut Work,
+    par: Par,
+    split: bool,
+) -> Result<(), usize> {
+    let (s_start, s_end) = (st.begin[s], st.begin[s + 1]);
+    let s_pattern = st.pattern(s);
+    let s_ncols = s_end - s_start;
+    let s_nrows = s_ncols + s_pattern.len();
+    for (i, &row) in s_pattern.iter().enumerate() {
+        work.local[row] = i + s_ncols;
+    }
+    // SAFETY: `s`'s values are this task's (the caller's contract).
+    let ls = unsafe { values.get_mut(st.val_ptr[s]..st.val_ptr[s + 1]) };
+    for j in s_start..s_end {
+        let col = (j - s_start) * s_nrows;
+        for p in a.col_ptr[j]..a.col_ptr[j + 1] {
+            let i = a.row_idx[p] as usize;
+            if i < j {
+                continue;
+            }
+            let ix = if i >= s_end {
+                work.local[i]
+            } else {
+                i - s_start
+            };
+            ls[col + ix] += a.values[p];
+        }
+    }
+    let desc = schedule.descendants(s);
+    let chunks = if split && s_ncols >= SPLIT_COLUMNS {
+        column_chunks(s_ncols, s_nrows, 4 * rayon::current_num_threads().max(1))
+    } else {
+        vec![(0, s_ncols)]
+    };
+    if chunks.len() > 1 {
+        use rayon::prelude::*;
+        let local = &work.local;
+        let ls_ptr = Values {
+            ptr: ls.as_mut_ptr(),
+            len: ls.len(),
+        };
+        chunks.par_iter().for_each_init(
+            || (Vec::new(), Vec::new()),
+            |(row_idx, col_idx), &(c0, c1)| {
+                for &d in desc {
+                    // SAFETY: the chunks write disjoint columns of `s`; the descendants
+                    // are finished.
+                    unsafe {
+                        update(
+                            st,
+                            values,
+                            &ls_ptr,
+                            s,
+                            d as usize,
+                            local,
+                            row_idx,
+                            col_idx,
+                            (c0, c1),
+                        )
+                    };
+                }
+            },
+        );
+    } else {
+        let ls_ptr = Values {
+            ptr: ls.as_mut_ptr(),
+            len: ls.len(),
+        };
+        for &d in desc {
+            // SAFETY: as above, on this task alone.
+            unsafe {
+                update(
+                    st,
+                    values,
+                    &ls_ptr,
+                    s,
+                    d as usize,
+                    &work.local,
+                    &mut work.row_idx,
+                    &mut work.col_idx,
+                    (0, s_ncols),
+                )
+            };
+        }
+    }
+    let ls = MatMut::from_column_major_slice_mut(ls, s_nrows, s_ncols);
+    let (mut top, mut bot) = ls.split_at_row_mut(s_ncols);
+    let factored = faer::linalg::cholesky::ldlt::factor::cholesky_in_place(
+        top.rb_mut(),
+        Default::default(),
+        par,
+        MemStack::new(&mut work.mem),
+        Default::default(),
+    );
+    if let Err(faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index }) = factored {
+        for &row in s_pattern {
+            work.local[row] = usize::MAX;
+        }
+        return Err(index + s_start);
+    }
+    for j in 0..s_ncols {
+        for i in 0..j {
+            top[(i, j)] = 0.0;
+        }
+    }
+    faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place(
+        top.rb(),
+        bot.rb_mut().transpose_mut(),
+        par,
+    );
+    for j in 0..s_ncols {
+        let d = top[(j, j)].recip();
+        for i in 0..s_pattern.len() {
+            bot[(i, j)] *= d;
+        }
+    }
+    for &row in s_pattern {
+        work.local[row] = usize::MAX;
+    }
+    Ok(())
+}
+
+/// Splits the `ncols` columns of a supernode with `nrows` rows into at most `parts` ranges of
+/// about equal lower-triangular area (column `j` has `nrows − j` values to update).
+fn column_chunks(ncols: usize, nrows: usize, parts: usize) -> Vec<(usize, usize)> {
+    let area = |j: usize| (nrows - j) as f64;
+    let total: f64 = (0..ncols).map(area).sum();
+    let mut out = Vec::with_capacity(parts);
+    let (mut start, mut acc) = (0, 0.0);
+    for j in 0..ncols {
+        acc += area(j);
+        if acc >= total * (out.len() + 1) as f64 / parts as f64 && j + 1 < ncols {
+            out.push((start, j + 1));
+            start = j + 1;
+        }
+    }
+    out.push((start, ncols));
+    out
+}
+
+/// The update of supernode `s` by its descendant `d`, restricted to `s`'s columns
+/// `c0..c1` (all of them: faer's own call): `L_s −= L_d,rows D_d L_d,colsᵀ` on the lower
+/// triangle, with faer's gather-scatter kernel on one thread.
+///
+/// # Safety
+/// `d` is finished and no other task touches `s`'s columns `c0..c1`.
+#[allow(clippy::too_many_arguments)]
+unsafe fn update(
+    st: &Structure,
+    values: &Values,
+    ls: &Values,
+    s: usize,
+    d: usize,
+    local: &[usize],
+    row_idx: &mut Vec<usize>,
+    col_idx: &mut Vec<usize>,
+    (c0, c1): (usize, usize),
+) {
+    let (s_start, s_end) = (st.begin[s], st.begin[s + 1]);
+    let s_nrows = (s_end - s_start) + st.pattern(s).len();
+    let d_pattern = st.pattern(d);
+    let d_ncols = st.ncols(d);
+    let d_nrows = d_ncols + d_pattern.len();
+    // The rows of `d` in `s`'s columns `c0..c1` and below them.
+    let lo = d_pattern.partition_point(|&r| r < s_start + c0);
+    let mid = d_pattern[lo..].partition_point(|&r| r < s_start + c1);
+    if mid == 0 {
+        return;
+    }
+    row_idx.clear();
+    row_idx.extend(
+        d_pattern[lo..]
+            .iter()
+            .map(|&r| if r < s_end { r - s_start } else { local[r] }),
+    );
+    col_idx.clear();
+    col_idx.extend(d_pattern[lo..lo + mid].iter().map(|&r| r - s_start));
+    // SAFETY: `d` is finished (the caller's contract).
+    let ld = unsafe { values.get(st.val_ptr[d]..st.val_ptr[d + 1]) };
+    let nrows = d_pattern.len() - lo;
+    let alpha = -1.0f64;
+    #[cfg(target_arch = "x86_64")]
+    {
+        use private_gemm_x86::{Accum, DType, DstKind, IType};
+        let instr = instruction_set().expect("checked by `factorise`");
+        // SAFETY: the kernel reads `nrows × d_ncols` values of `L_d` from its row
+        // `d_ncols + lo`, `mid` of them from the same row, the diagonal of its leading block,
+        // and adds to `s`'s values at the rows `row_idx` and columns `col_idx` (within its
+        // `s_nrows × s_ncols` block: each local row below `s_nrows`, each column below
+        // `c1`), which this task alone writes (the caller's contract).
+        unsafe {
+            private_gemm_x86::gemm(
+                DType::F64,
+                if size_of::<usize>() == 8 {
+                    IType::U64
+                } else {
+                    IType::U32
+                },
+                instr,
+                nrows,
+                mid,
+                d_ncols,
+                ls.ptr as *mut (),
+                1,
+                s_nrows as isize,
+                row_idx.as_ptr() as *const (),
+                col_idx.as_ptr() as *const (),
+                DstKind::Lower,
+                Accum::Add,
+                ld.as_ptr().add(d_ncols + lo) as *const (),
+                1,
+                d_nrows as isize,
+                false,
+                ld.as_ptr() as *const (),
+                d_nrows as isize + 1,
+                ld.as_ptr().add(d_ncols + lo) as *const (),
+                d_nrows as isize,
+                1,
+                true,
+                &raw const alpha as *const (),
+                1,
+            );
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (ld, nrows, alpha, ls, s_nrows);
+        unreachable!("`available` is false off x86-64");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn column_chunks_tile_the_columns() {
+        for (ncols, nrows, parts) in [(1, 1, 8), (32, 40, 8), (1000, 4000, 8), (33, 33, 2)] {
+            let c = super::column_chunks(ncols, nrows, parts);
+            assert!(c.len() <= parts && !c.is_empty());
+            assert_eq!(c[0].0, 0);
+            assert_eq!(c.last().unwrap().1, ncols);
+            assert!(c.windows(2).all(|w| w[0].1 == w[1].0 && w[0].0 < w[0].1));
+        }
+    }
+}
