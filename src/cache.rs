@@ -566,6 +566,29 @@ impl WritableSection {
         unsafe { std::slice::from_raw_parts_mut(p.cast::<f64>(), self.len) }
     }
 
+    /// Faults the section's pages in for writing, in parts on rayon's threads
+    /// (`MADV_POPULATE_WRITE`, Linux 5.14 on): the pages of a new file read as zeros, so this
+    /// is the parallel first touch without writing the zeros again. `false` where the kernel
+    /// refuses it (the caller then writes the zeros).
+    pub fn populate(&self) -> bool {
+        #[cfg(target_os = "linux")]
+        {
+            use rayon::prelude::*;
+            const PART: usize = 64 << 20;
+            let page = 4096;
+            let start = self.offset / page * page;
+            let end = self.offset + 8 * self.len;
+            let parts: Vec<usize> = (start..end).step_by(PART).collect();
+            parts.par_iter().all(|&a| {
+                self.map
+                    .advise_range(memmap2::Advice::PopulateWrite, a, PART.min(end - a))
+                    .is_ok()
+            })
+        }
+        #[cfg(not(target_os = "linux"))]
+        false
+    }
+
     /// The address of the floats (to tell them from a copy).
     fn address(&self) -> usize {
         self.map.as_ptr() as usize + self.offset

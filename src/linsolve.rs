@@ -460,6 +460,9 @@ pub struct SaddleFactor {
     /// Per supernode with columns of `K̂`, the supernode, its columns of `K̂` and its pattern
     /// rows of `K̂` (the solves' plan, found at the first solve: 0.5 ms per solve on L5).
     plan: std::sync::OnceLock<Vec<(usize, usize, usize)>>,
+    /// `W = Y K̂⁻¹ Yᵀ` (its lower triangle) as the factorisation found it, the Schur
+    /// complement of the constraint block, until [`Self::delassus`] takes it.
+    schur: std::sync::Mutex<Option<faer::Mat<f64>>>,
 }
 
 /// The supernodal structure of a symbolic factorisation (forced supernodal at analysis).
@@ -719,10 +722,14 @@ impl SaddleSymbolic {
         let mut owned = Vec::new();
         let l: &mut [f64] = match &mut dest {
             Some(d) => {
-                // Its pages faulted in on all cores, as `vec_in_parallel` does.
-                use rayon::prelude::*;
+                // Its pages faulted in on all cores, as `vec_in_parallel` does: those of a new
+                // file read as zeros, so populating them is enough where the kernel can.
+                let populated = tree && d.populate();
                 let v = d.as_mut_f64();
-                v.par_chunks_mut(1 << 16).for_each(|c| c.fill(0.0));
+                if !populated {
+                    use rayon::prelude::*;
+                    v.par_chunks_mut(1 << 16).for_each(|c| c.fill(0.0));
+                }
                 v
             }
             None => {
@@ -731,6 +738,7 @@ impl SaddleSymbolic {
             }
         };
         crate::trace::mark("factor: values cleared");
+        let mut schur = None;
         if tree {
             let lower = crate::supernodal::LowerCsc::permuted(
                 &self.col_ptr,
@@ -746,7 +754,7 @@ impl SaddleSymbolic {
                 rows: &self.layout.rows,
                 val_ptr: &self.layout.val_ptr,
             };
-            crate::supernodal::factorise(&st, &lower, l, par)
+            schur = crate::supernodal::factorise(&st, &lower, l, par, Some(n))
                 .map_err(|pivot| FactorError::NotPositiveDefinite { pivot, n })?;
         } else {
             let mut mem = MemBuffer::try_new(
@@ -778,6 +786,7 @@ impl SaddleSymbolic {
             None => FactorValues::Owned(owned),
         };
         let f = self.from_values(std::sync::Arc::new(values))?;
+        *f.schur.lock().unwrap_or_else(|p| p.into_inner()) = schur;
         let values = f.values();
         // K̂ must be positive definite: every pivot of its block positive (a body that nothing
         // holds gives a vanishing or negative one).
@@ -1124,6 +1133,7 @@ impl SaddleFactor {
             n,
             m,
             plan: std::sync::OnceLock::new(),
+            schur: std::sync::Mutex::new(None),
         })
     }
 
@@ -1248,33 +1258,36 @@ impl SaddleFactor {
     /// factorisation (see `contact::PrefixFactor`).
     pub fn delassus(&self, keep_factor: bool) -> Option<(faer::Mat<f64>, Option<faer::Mat<f64>>)> {
         use faer::linalg::matmul::triangular::{BlockStructure, matmul};
-        let (n, m) = (self.n, self.m);
-        let values = self.values();
-        // L_MM with D_MM on its diagonal.
-        let mut l = zeros_in_parallel(m, m);
-        for s in 0..self.layout.n_supernodes() {
-            let node = self.layout.node(s, &values);
-            let (start, pattern, ncols) = (node.start, node.pattern, node.ncols);
-            if start + ncols <= n {
-                continue;
+        let m = self.m;
+        let schur = self.schur.lock().unwrap_or_else(|p| p.into_inner()).take();
+        if let Some(mut w) = schur {
+            // W as the factorisation found it (its lower triangle): no product.
+            let l = if keep_factor { Some(self.l_mm()) } else { None };
+            let values = self.values();
+            let d: Vec<f64> = match &l {
+                Some(l) => (0..m).map(|i| l[(i, i)]).collect(),
+                None => self.d_mm(&values),
+            };
+            if !negative_pivots(&d) {
+                return None;
             }
-            for j in 0..ncols {
-                let col = start + j;
-                if col < n {
-                    continue;
-                }
-                for i in j..ncols {
-                    l[(start + i - n, col - n)] = node.at(i, j);
-                }
-                for (k, &row) in pattern.iter().enumerate() {
-                    l[(row - n, col - n)] = node.at(ncols + k, j);
-                }
-            }
+            let ws = SharedMat::of(&mut w);
+            // SAFETY: (j, i) is above the diagonal in this task's rows, (i, j) below it in
+            // its columns: no task writes what another reads or writes.
+            for_tiles_below(m, |i, j| unsafe { ws.set(j, i, ws.get(i, j)) });
+            crate::trace::mark("delassus: from the factorisation");
+            let Some(mut l) = l else {
+                return Some((w, None));
+            };
+            // Lᵀ in the strict upper half, as `cholesky_of_w` reads it.
+            let ls = SharedMat::of(&mut l);
+            // SAFETY: as above.
+            for_tiles_below(m, |i, j| unsafe { ls.set(j, i, ls.get(i, j)) });
+            return Some((w, Some(cholesky_of_w(l))));
         }
+        let mut l = self.l_mm();
         crate::trace::mark("delassus: L_MM gathered");
-        let dmax = (0..m).map(|i| l[(i, i)].abs()).fold(0.0, f64::max);
-        if (0..m).any(|i| l[(i, i)].partial_cmp(&(-1e-13 * dmax)) != Some(std::cmp::Ordering::Less))
-        {
+        if !negative_pivots(&(0..m).map(|i| l[(i, i)]).collect::<Vec<_>>()) {
             return None;
         }
         // One array holds both operands of W = −B Lᵀ: B = L D in its lower half (D on the
@@ -1315,32 +1328,90 @@ impl SaddleFactor {
         if !keep_factor {
             return Some((w, None));
         }
-        // C from the same array: column j of L (unit diagonal) is the strict upper half's row
-        // j, scaled by (−d_j)^½; the strict upper half is cleared.
-        let s: Vec<f64> = (0..m).map(|j| (-l[(j, j)]).sqrt()).collect();
-        let ls = SharedMat::of(&mut l);
-        // SAFETY: (i, j) is below the diagonal in this task's columns, (j, i) above it in its
-        // rows: no task writes what another reads or writes.
-        for_tiles_below(m, |i, j| unsafe { ls.set(i, j, ls.get(j, i) * s[j]) });
-        for (j, &sj) in s.iter().enumerate() {
-            l[(j, j)] = sj;
-        }
-        {
-            use rayon::prelude::*;
-            l.par_col_chunks_mut(TILE)
-                .enumerate()
-                .for_each(|(b, cols)| {
-                    let mut cols = cols;
-                    for c in 0..cols.ncols() {
-                        let j = b * TILE + c;
-                        for i in 0..j {
-                            cols[(i, c)] = 0.0;
-                        }
-                    }
-                });
-        }
-        Some((w, Some(l)))
+        Some((w, Some(cholesky_of_w(l))))
     }
+
+    /// `L_MM` (dense, lower) with `D_MM` on its diagonal, from the constraint columns'
+    /// supernodes.
+    fn l_mm(&self) -> faer::Mat<f64> {
+        let (n, m) = (self.n, self.m);
+        let values = self.values();
+        let mut l = zeros_in_parallel(m, m);
+        for s in 0..self.layout.n_supernodes() {
+            let node = self.layout.node(s, &values);
+            let (start, pattern, ncols) = (node.start, node.pattern, node.ncols);
+            if start + ncols <= n {
+                continue;
+            }
+            for j in 0..ncols {
+                let col = start + j;
+                if col < n {
+                    continue;
+                }
+                for i in j..ncols {
+                    l[(start + i - n, col - n)] = node.at(i, j);
+                }
+                for (k, &row) in pattern.iter().enumerate() {
+                    l[(row - n, col - n)] = node.at(ncols + k, j);
+                }
+            }
+        }
+        l
+    }
+
+    /// `D_MM`, the pivots of the constraint columns.
+    fn d_mm(&self, values: &[f64]) -> Vec<f64> {
+        let n = self.n;
+        let mut d = Vec::with_capacity(self.m);
+        for s in 0..self.layout.n_supernodes() {
+            let node = self.layout.node(s, values);
+            for j in 0..node.ncols {
+                if node.start + j >= n {
+                    d.push(node.at(j, j));
+                }
+            }
+        }
+        d
+    }
+}
+
+/// Whether the constraint block's pivots `d` are all negative to working precision (`W`
+/// positive definite, `Y` of full row rank).
+fn negative_pivots(d: &[f64]) -> bool {
+    let dmax = d.iter().map(|x| x.abs()).fold(0.0, f64::max);
+    d.iter()
+        .all(|x| x.partial_cmp(&(-1e-13 * dmax)) == Some(std::cmp::Ordering::Less))
+}
+
+/// `C = L_MM (−D_MM)^½` from `l`, which holds `D_MM` on its diagonal and `L_MMᵀ` (unit
+/// diagonal) in its strict upper half: a lower Cholesky factor of `W`.
+fn cholesky_of_w(mut l: faer::Mat<f64>) -> faer::Mat<f64> {
+    let m = l.nrows();
+    // C from the same array: column j of L (unit diagonal) is the strict upper half's row
+    // j, scaled by (−d_j)^½; the strict upper half is cleared.
+    let s: Vec<f64> = (0..m).map(|j| (-l[(j, j)]).sqrt()).collect();
+    let ls = SharedMat::of(&mut l);
+    // SAFETY: (i, j) is below the diagonal in this task's columns, (j, i) above it in its
+    // rows: no task writes what another reads or writes.
+    for_tiles_below(m, |i, j| unsafe { ls.set(i, j, ls.get(j, i) * s[j]) });
+    for (j, &sj) in s.iter().enumerate() {
+        l[(j, j)] = sj;
+    }
+    {
+        use rayon::prelude::*;
+        l.par_col_chunks_mut(TILE)
+            .enumerate()
+            .for_each(|(b, cols)| {
+                let mut cols = cols;
+                for c in 0..cols.ncols() {
+                    let j = b * TILE + c;
+                    for i in 0..j {
+                        cols[(i, c)] = 0.0;
+                    }
+                }
+            });
+    }
+    l
 }
 
 #[cfg(test)]
@@ -1429,7 +1500,9 @@ mod tests {
             |i: usize, j: usize| -> f64 { y[i].iter().map(|&(r, v)| v * solved[j][r]).sum() };
         let (w, c) = f.delassus(true).unwrap();
         let c = c.expect("kept");
-        let (w_alone, none) = f.delassus(false).unwrap();
+        // `delassus` takes the Schur complement the factorisation left: a second factor.
+        let again = sym.factorise(&kv, &y).unwrap();
+        let (w_alone, none) = again.delassus(false).unwrap();
         assert!(none.is_none());
         let wmax = (0..m).map(|i| w_ref(i, i).abs()).fold(0.0, f64::max);
         for i in 0..m {
@@ -1495,16 +1568,17 @@ mod tests {
         assert!(SaddleFactor::from_layout(layout.clone(), short, n, y.len()).is_err());
     }
 
-    /// The factorisation on the elimination tree's schedule (`crate::supernodal`) gives
-    /// faer's factor bit for bit, on one, two or three threads: a 2-D grid ordered by nested
-    /// dissection (independent subtrees under the top separators) with 120 constraint rows,
-    /// whose dense block takes the updates split over its columns.
-    #[test]
-    fn the_tree_scheduled_factor_is_faers_bit_for_bit() {
-        if !crate::supernodal::available() {
-            eprintln!("no AVX2 and FMA here: faer's loop is the only one");
-            return;
-        }
+    /// A 70 × 70 grid's `K̂` (upper CSC pattern and values) with 120 constraint rows, ordered
+    /// by nested dissection: independent subtrees under top separators and a constraint block
+    /// wide enough for the split updates.
+    fn grid_saddle() -> (
+        usize,
+        Vec<usize>,
+        Vec<usize>,
+        Vec<f64>,
+        Rows,
+        SaddleSymbolic,
+    ) {
         let side = 70;
         let n = side * side;
         let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
@@ -1527,6 +1601,73 @@ mod tests {
             .collect();
         let fwd = crate::ordering::nested_dissection(n, &col_ptr, &row_idx);
         let sym = SaddleSymbolic::with_ordering(n, &col_ptr, &row_idx, &y, &fwd).unwrap();
+        (n, col_ptr, row_idx, values, y, sym)
+    }
+
+    /// The Schur complement that the tree-scheduled factorisation copies out of the
+    /// constraint block is the Delassus operator: against the product `−L_MM D_MM L_MMᵀ` of
+    /// faer's factor (round-off apart) and against solves; `C` is the same either way.
+    #[test]
+    fn the_schur_complement_copied_by_the_factorisation_is_the_delassus_operator() {
+        if !crate::supernodal::available() {
+            eprintln!("no AVX2 and FMA here: faer's loop is the only one");
+            return;
+        }
+        let (n, _, _, values, y, sym) = grid_saddle();
+        let m = y.len();
+        let tree = sym.factorise_using(&values, &y, None, true).unwrap();
+        assert!(
+            tree.schur.lock().unwrap().is_some(),
+            "copied by the factorisation"
+        );
+        let faer = sym.factorise_using(&values, &y, None, false).unwrap();
+        assert!(faer.schur.lock().unwrap().is_none());
+        let (w, c) = tree.delassus(true).unwrap();
+        let (w_product, c_product) = faer.delassus(true).unwrap();
+        let wmax = (0..m).map(|i| w[(i, i)].abs()).fold(0.0, f64::max);
+        let mut differ = 0;
+        for j in 0..m {
+            for i in 0..m {
+                assert_eq!(w[(i, j)].to_bits(), w[(j, i)].to_bits(), "symmetric");
+                let d = (w[(i, j)] - w_product[(i, j)]).abs();
+                assert!(d <= 1e-13 * wmax, "W[{i},{j}] differs by {d:e}");
+                differ += (d > 0.0) as usize;
+                let (c, cp) = (c.as_ref().unwrap(), c_product.as_ref().unwrap());
+                assert_eq!(c[(i, j)].to_bits(), cp[(i, j)].to_bits(), "C[{i},{j}]");
+            }
+        }
+        // Two computations, not one: they differ in the last bits somewhere.
+        assert!(differ > 0);
+        for (i, j) in [(0, 0), (3, 17), (60, 61), (119, 2)] {
+            let mut x = vec![0.0; n];
+            y[j].iter().for_each(|&(r, v)| x[r] += v);
+            faer.solve_in_place(&mut x);
+            let w_ref: f64 = y[i].iter().map(|&(r, v)| v * x[r]).sum();
+            assert!(
+                (w[(i, j)] - w_ref).abs() < 1e-12 * wmax,
+                "W[{i},{j}] against solves"
+            );
+        }
+        // Without the factor C, the pivots come from the factor's values.
+        let again = sym.factorise_using(&values, &y, None, true).unwrap();
+        let (w_alone, none) = again.delassus(false).unwrap();
+        assert!(none.is_none());
+        assert!(
+            (0..m * m).all(|k| w_alone[(k % m, k / m)].to_bits() == w[(k % m, k / m)].to_bits())
+        );
+    }
+
+    /// The factorisation on the elimination tree's schedule (`crate::supernodal`) gives
+    /// faer's factor bit for bit, on one, two or three threads: a 2-D grid ordered by nested
+    /// dissection (independent subtrees under the top separators) with 120 constraint rows,
+    /// whose dense block takes the updates split over its columns.
+    #[test]
+    fn the_tree_scheduled_factor_is_faers_bit_for_bit() {
+        if !crate::supernodal::available() {
+            eprintln!("no AVX2 and FMA here: faer's loop is the only one");
+            return;
+        }
+        let (_, _, _, values, y, sym) = grid_saddle();
         let lay = &sym.layout;
         let st = crate::supernodal::Structure {
             begin: &lay.begin,

@@ -316,11 +316,22 @@ impl Work {
 /// The numeric factorisation of `a` (its lower triangle in the factor's numbering) into `l`
 /// (zeros on entry, [`Structure::val_ptr`]'s last length): `Err(column)` at a zero pivot,
 /// as faer reports it. `par` is the parallelism of the top supernodes' dense kernels; the
-/// subtrees and the updates use all of rayon's threads.
+/// subtrees and the updates use all of rayon's threads. With `schur_from = Some(n)`, also
+/// the Schur complement of the trailing columns `n..` (its lower triangle, negated:
+/// `Y K̂⁻¹ Yᵀ` for the saddle-point matrix of `K̂` and `Y`) where they all lie in the last
+/// supernode (the dense block of the constraint rows, as on every mesh of the ladder):
+/// that block as its descendants left it, less the elimination of the supernode's own
+/// columns before `n` (a rank update instead of the product `L_MM D_MM L_MMᵀ`).
 ///
 /// # Panics
 /// Where [`available`] is false.
-pub fn factorise(st: &Structure, a: &LowerCsc, l: &mut [f64], par: Par) -> Result<(), usize> {
+pub fn factorise(
+    st: &Structure,
+    a: &LowerCsc,
+    l: &mut [f64],
+    par: Par,
+    schur_from: Option<usize>,
+) -> Result<Option<faer::Mat<f64>>, usize> {
     use rayon::prelude::*;
     assert!(
         available(),
@@ -336,6 +347,18 @@ pub fn factorise(st: &Structure, a: &LowerCsc, l: &mut [f64], par: Par) -> Resul
         ptr: l.as_mut_ptr(),
         len: l.len(),
     };
+    // The Schur complement of the trailing columns `n..`, where they end the last
+    // supernode (the root: the dense block of the constraint rows, with or without the top
+    // separator's columns before them).
+    let last = nsup.checked_sub(1);
+    let mut schur = schur_from
+        .zip(last)
+        .filter(|&(n, s)| n < size && st.begin[s] <= n && st.pattern(s).is_empty())
+        .map(|(n, s)| Schur {
+            s,
+            kk: n - st.begin[s],
+            w: crate::linsolve::zeros_in_parallel(size - n, size - n),
+        });
     // One set of working arrays per thread (the row map alone is 8 bytes per row).
     let works: Vec<std::sync::Mutex<Work>> = (0..rayon::current_num_threads().max(1))
         .map(|_| std::sync::Mutex::new(Work::new(size, max_cols, Par::Seq)))
@@ -350,7 +373,19 @@ pub fn factorise(st: &Structure, a: &LowerCsc, l: &mut [f64], par: Par) -> Resul
             for &s in nodes {
                 // SAFETY: this task alone factorises the subtree's supernodes, whose
                 // descendants are in the subtree and earlier in `nodes`.
-                unsafe { supernode(st, a, &schedule, &values, s, &mut work, Par::Seq, false)? };
+                unsafe {
+                    supernode(
+                        st,
+                        a,
+                        &schedule,
+                        &values,
+                        s,
+                        &mut work,
+                        Par::Seq,
+                        false,
+                        None,
+                    )?
+                };
             }
             Ok(())
         })
@@ -368,9 +403,21 @@ pub fn factorise(st: &Structure, a: &LowerCsc, l: &mut [f64], par: Par) -> Resul
     let mut work = Work::new(size, max_cols, par);
     for &s in &schedule.top {
         // SAFETY: the top supernodes one after the other, after every subtree.
-        unsafe { supernode(st, a, &schedule, &values, s, &mut work, par, true)? };
+        unsafe {
+            supernode(
+                st,
+                a,
+                &schedule,
+                &values,
+                s,
+                &mut work,
+                par,
+                true,
+                schur.as_mut().filter(|w| w.s == s),
+            )?
+        };
     }
-    Ok(())
+    Ok(schur.map(|w| w.w))
 }
 
 /// Factorises supernode `s`: its columns of `a`, the updates of its descendants in ascending
@@ -390,6 +437,7 @@ unsafe fn supernode(
     work: &mut Work,
     par: Par,
     split: bool,
+    mut schur: Option<&mut Schur>,
 ) -> Result<(), usize> {
     let (s_start, s_end) = (st.begin[s], st.begin[s + 1]);
     let s_pattern = st.pattern(s);
@@ -421,42 +469,17 @@ unsafe fn supernode(
     } else {
         vec![(0, s_ncols)]
     };
-    if chunks.len() > 1 {
-        use rayon::prelude::*;
-        let local = &work.local;
-        let ls_ptr = Values {
-            ptr: ls.as_mut_ptr(),
-            len: ls.len(),
-        };
-        chunks.par_iter().for_each_init(
-            || (Vec::new(), Vec::new()),
-            |(row_idx, col_idx), &(c0, c1)| {
-                for &d in desc {
-                    // SAFETY: the chunks write disjoint columns of `s`; the descendants
-                    // are finished.
-                    unsafe {
-                        update(
-                            st,
-                            values,
-                            &ls_ptr,
-                            s,
-                            d as usize,
-                            local,
-                            row_idx,
-                            col_idx,
-                            (c0, c1),
-                        )
-                    };
-                }
-            },
-        );
-    } else {
-        let ls_ptr = Values {
-            ptr: ls.as_mut_ptr(),
-            len: ls.len(),
-        };
+    let ls_ptr = Values {
+        ptr: ls.as_mut_ptr(),
+        len: ls.len(),
+    };
+    // The updates and the copy of the columns `c0..c1`.
+    let columns = |(c0, c1): (usize, usize),
+                   local: &[usize],
+                   row_idx: &mut Vec<usize>,
+                   col_idx: &mut Vec<usize>| {
         for &d in desc {
-            // SAFETY: as above, on this task alone.
+            // SAFETY: the tasks write disjoint columns of `s`; the descendants are finished.
             unsafe {
                 update(
                     st,
@@ -464,16 +487,36 @@ unsafe fn supernode(
                     &ls_ptr,
                     s,
                     d as usize,
-                    &work.local,
-                    &mut work.row_idx,
-                    &mut work.col_idx,
-                    (0, s_ncols),
+                    local,
+                    row_idx,
+                    col_idx,
+                    (c0, c1),
                 )
             };
         }
+    };
+    if chunks.len() > 1 {
+        use rayon::prelude::*;
+        let local = &work.local;
+        chunks.par_iter().for_each_init(
+            || (Vec::new(), Vec::new()),
+            |(row_idx, col_idx), &range| columns(range, local, row_idx, col_idx),
+        );
+    } else {
+        columns(
+            (0, s_ncols),
+            &work.local,
+            &mut work.row_idx,
+            &mut work.col_idx,
+        );
     }
     let ls = MatMut::from_column_major_slice_mut(ls, s_nrows, s_ncols);
     let (mut top, mut bot) = ls.split_at_row_mut(s_ncols);
+    if let Some(w) = schur.as_deref_mut() {
+        // The trailing columns' block, updated by every column before the supernode: minus
+        // its Schur complement but for the supernode's own `kk` leading columns.
+        w.copy_block(top.rb());
+    }
     let factored = faer::linalg::cholesky::ldlt::factor::cholesky_in_place(
         top.rb_mut(),
         Default::default(),
@@ -506,7 +549,62 @@ unsafe fn supernode(
     for &row in s_pattern {
         work.local[row] = usize::MAX;
     }
+    if let Some(w) = schur {
+        w.eliminate_leading(top.rb(), par);
+    }
     Ok(())
+}
+
+/// The Schur complement `S` of the trailing columns `n..` of the matrix, taken from the last
+/// supernode `s` (the root, without off-diagonal rows), which holds `kk` columns before `n`:
+/// `w = −S` (lower triangle), for the saddle-point matrix `W = Y K̂⁻¹ Yᵀ`.
+struct Schur {
+    s: usize,
+    kk: usize,
+    w: faer::Mat<f64>,
+}
+
+impl Schur {
+    /// `w = −A_MM` from the supernode's block `a` as its descendants left it (lower triangle).
+    fn copy_block(&mut self, a: faer::MatRef<'_, f64>) {
+        use rayon::prelude::*;
+        let kk = self.kk;
+        self.w
+            .par_col_chunks_mut(64)
+            .enumerate()
+            .for_each(|(b, mut cols)| {
+                for c in 0..cols.ncols() {
+                    let j = b * 64 + c;
+                    for i in j..cols.nrows() {
+                        cols[(i, c)] = -a[(kk + i, kk + j)];
+                    }
+                }
+            });
+    }
+
+    /// `w += L_MK D_K L_MKᵀ` from the factorised block `l` (unit lower `L` with `D` on its
+    /// diagonal): the elimination of the supernode's own leading `kk` columns.
+    fn eliminate_leading(&mut self, l: faer::MatRef<'_, f64>, par: Par) {
+        use faer::linalg::matmul::triangular::{BlockStructure, matmul};
+        let kk = self.kk;
+        if kk == 0 {
+            return;
+        }
+        let m = self.w.nrows();
+        let l_mk = l.get(kk.., ..kk);
+        let b = faer::Mat::<f64>::from_fn(m, kk, |i, k| l_mk[(i, k)] * l[(k, k)]);
+        matmul(
+            self.w.as_mut(),
+            BlockStructure::TriangularLower,
+            faer::Accum::Add,
+            b.as_ref(),
+            BlockStructure::Rectangular,
+            l_mk.transpose(),
+            BlockStructure::Rectangular,
+            1.0,
+            par,
+        );
+    }
 }
 
 /// Splits the `ncols` columns of a supernode with `nrows` rows into at most `parts` ranges of
