@@ -698,20 +698,20 @@ impl SaddleSymbolic {
         use faer::dyn_stack::{MemBuffer, MemStack};
         let (n, m) = (self.n, self.m);
         let size = n + m;
-        let mut values = Vec::with_capacity(self.row_idx.len());
-        values.extend_from_slice(&k_values[..self.col_ptr[n]]);
+        // The values of the constraint columns (those of K̂ are `k_values` as they are).
+        let kn = self.col_ptr[n];
+        let mut y_values = Vec::with_capacity(self.row_idx.len() - kn);
         for (i, row) in y_rows.iter().enumerate() {
             let rows = &self.row_idx[self.col_ptr[n + i]..self.col_ptr[n + i + 1]];
-            let start = values.len();
-            values.resize(start + rows.len(), 0.0);
+            let start = y_values.len();
+            y_values.resize(start + rows.len(), 0.0);
             for &(r, v) in row {
                 let p = rows[..rows.len() - 1]
                     .binary_search(&r)
                     .expect("row in the analysed pattern");
-                values[start + p] += v;
+                y_values[start + p] += v;
             }
         }
-        let a = SparseColMatRef::new(sym(size, &self.col_ptr, &self.row_idx), &values);
         let par = factor_parallelism();
         assert!(
             dest.as_ref()
@@ -743,10 +743,15 @@ impl SaddleSymbolic {
             let lower = crate::supernodal::LowerCsc::permuted(
                 &self.col_ptr,
                 &self.row_idx,
-                &values,
+                |p| {
+                    if p < kn {
+                        k_values[p]
+                    } else {
+                        y_values[p - kn]
+                    }
+                },
                 &self.layout.fwd,
             );
-            drop(values);
             crate::trace::mark("factor: lower triangle permuted");
             let st = crate::supernodal::Structure {
                 begin: &self.layout.begin,
@@ -757,6 +762,10 @@ impl SaddleSymbolic {
             schur = crate::supernodal::factorise(&st, &lower, l, par, Some(n))
                 .map_err(|pivot| FactorError::NotPositiveDefinite { pivot, n })?;
         } else {
+            let mut values = Vec::with_capacity(self.row_idx.len());
+            values.extend_from_slice(&k_values[..kn]);
+            values.extend_from_slice(&y_values);
+            let a = SparseColMatRef::new(sym(size, &self.col_ptr, &self.row_idx), &values);
             let mut mem = MemBuffer::try_new(
                 self.inner
                     .factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
@@ -1262,13 +1271,8 @@ impl SaddleFactor {
         let schur = self.schur.lock().unwrap_or_else(|p| p.into_inner()).take();
         if let Some(mut w) = schur {
             // W as the factorisation found it (its lower triangle): no product.
-            let l = if keep_factor { Some(self.l_mm()) } else { None };
             let values = self.values();
-            let d: Vec<f64> = match &l {
-                Some(l) => (0..m).map(|i| l[(i, i)]).collect(),
-                None => self.d_mm(&values),
-            };
-            if !negative_pivots(&d) {
+            if !negative_pivots(&self.d_mm(&values)) {
                 return None;
             }
             let ws = SharedMat::of(&mut w);
@@ -1276,14 +1280,18 @@ impl SaddleFactor {
             // its columns: no task writes what another reads or writes.
             for_tiles_below(m, |i, j| unsafe { ws.set(j, i, ws.get(i, j)) });
             crate::trace::mark("delassus: from the factorisation");
-            let Some(mut l) = l else {
+            if !keep_factor {
                 return Some((w, None));
-            };
-            // Lᵀ in the strict upper half, as `cholesky_of_w` reads it.
-            let ls = SharedMat::of(&mut l);
-            // SAFETY: as above.
-            for_tiles_below(m, |i, j| unsafe { ls.set(j, i, ls.get(i, j)) });
-            return Some((w, Some(cholesky_of_w(l))));
+            }
+            let c = self.c_from_root(&values).unwrap_or_else(|| {
+                let mut l = self.l_mm();
+                // Lᵀ in the strict upper half, as `cholesky_of_w` reads it.
+                let ls = SharedMat::of(&mut l);
+                // SAFETY: as above.
+                for_tiles_below(m, |i, j| unsafe { ls.set(j, i, ls.get(i, j)) });
+                cholesky_of_w(l)
+            });
+            return Some((w, Some(c)));
         }
         let mut l = self.l_mm();
         crate::trace::mark("delassus: L_MM gathered");
@@ -1357,6 +1365,27 @@ impl SaddleFactor {
             }
         }
         l
+    }
+
+    /// `C = L_MM (−D_MM)^½` (lower, as [`cholesky_of_w`] gives it, the same bits) read
+    /// straight from the last supernode when it holds every constraint column (as on every
+    /// mesh of the ladder), else `None`.
+    fn c_from_root(&self, values: &[f64]) -> Option<faer::Mat<f64>> {
+        let (n, m) = (self.n, self.m);
+        let node = self
+            .layout
+            .node(self.layout.n_supernodes().checked_sub(1)?, values);
+        if node.start > n || !node.pattern.is_empty() || node.start + node.ncols != n + m {
+            return None;
+        }
+        let kk = n - node.start;
+        Some(mat_filled(m, m, true, |j, col| {
+            let sj = (-node.at(kk + j, kk + j)).sqrt();
+            col[j] = sj;
+            for i in j + 1..m {
+                col[i] = node.at(kk + i, kk + j) * sj;
+            }
+        }))
     }
 
     /// `D_MM`, the pivots of the constraint columns.

@@ -40,9 +40,18 @@ pub struct LowerCsc {
 
 impl LowerCsc {
     /// The lower triangle of `P A Pᵀ` from the upper triangle of `A` in compressed columns
-    /// (`col_ptr`, `row_idx`, `values`; entries below the diagonal are ignored), where
-    /// `fwd[new] = old`.
-    pub fn permuted(col_ptr: &[usize], row_idx: &[usize], values: &[f64], fwd: &[usize]) -> Self {
+    /// (`col_ptr`, `row_idx`, the value of entry `p` given by `value(p)`; entries below the
+    /// diagonal are ignored), where `fwd[new] = old`. In parts of the columns on rayon's
+    /// threads; the entries of a column come in the order of the parts, and the
+    /// factorisation adds each to a value of its own, so their order does not matter.
+    pub fn permuted(
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        value: impl Fn(usize) -> f64 + Sync,
+        fwd: &[usize],
+    ) -> Self {
+        use rayon::prelude::*;
+        const PARTS: usize = 4;
         let size = fwd.len();
         let mut inv = vec![0u32; size];
         for (new, &old) in fwd.iter().enumerate() {
@@ -52,33 +61,75 @@ impl LowerCsc {
             let (pr, pc) = (inv[r], inv[c]);
             if pr >= pc { (pc, pr) } else { (pr, pc) }
         };
-        let mut ptr = vec![0usize; size + 1];
-        for c in 0..size {
-            for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
-                if r <= c {
-                    ptr[place(r, c).0 as usize + 1] += 1;
+        // Source columns in parts of about equal numbers of entries.
+        let nnz_in = col_ptr[size];
+        let bounds: Vec<usize> = (0..=PARTS)
+            .map(|t| {
+                col_ptr[..=size]
+                    .partition_point(|&p| p < t * nnz_in / PARTS)
+                    .min(size)
+            })
+            .map(|c| c.min(size))
+            .collect();
+        let parts: Vec<(usize, usize)> = bounds.windows(2).map(|w| (w[0], w[1])).collect();
+        // Each part's entries per destination column, then their offsets in it.
+        let mut counts: Vec<Vec<u32>> = parts
+            .par_iter()
+            .map(|&(c0, c1)| {
+                let mut count = vec![0u32; size];
+                for c in c0..c1 {
+                    for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
+                        if r <= c {
+                            count[place(r, c).0 as usize] += 1;
+                        }
+                    }
                 }
-            }
-        }
+                count
+            })
+            .collect();
+        let mut ptr = vec![0usize; size + 1];
         for j in 0..size {
-            ptr[j + 1] += ptr[j];
+            let mut off = 0u32;
+            for count in counts.iter_mut() {
+                let k = count[j];
+                count[j] = off;
+                off += k;
+            }
+            ptr[j + 1] = ptr[j] + off as usize;
         }
         let nnz = ptr[size];
-        let mut next = ptr[..size].to_vec();
         let mut rows = vec![0u32; nnz];
         let mut vals = vec![0.0; nnz];
-        for c in 0..size {
-            for p in col_ptr[c]..col_ptr[c + 1] {
-                let r = row_idx[p];
-                if r <= c {
-                    let (col, row) = place(r, c);
-                    let q = next[col as usize];
-                    next[col as usize] += 1;
-                    rows[q] = row;
-                    vals[q] = values[p];
+        let out = (
+            Values {
+                ptr: vals.as_mut_ptr(),
+                len: nnz,
+            },
+            RowsOut(rows.as_mut_ptr()),
+        );
+        counts
+            .par_iter_mut()
+            .zip(&parts)
+            .for_each(|(next, &(c0, c1))| {
+                let out = &out;
+                for c in c0..c1 {
+                    for p in col_ptr[c]..col_ptr[c + 1] {
+                        let r = row_idx[p];
+                        if r <= c {
+                            let (col, row) = place(r, c);
+                            let q = ptr[col as usize] + next[col as usize] as usize;
+                            next[col as usize] += 1;
+                            assert!(q < nnz);
+                            // SAFETY: `q` is in bounds (asserted) and this part's own slot
+                            // of the column: the parts' offsets do not overlap.
+                            unsafe {
+                                *out.0.ptr.add(q) = value(p);
+                                *out.1.0.add(q) = row;
+                            }
+                        }
+                    }
                 }
-            }
-        }
+            });
         LowerCsc {
             col_ptr: ptr,
             row_idx: rows,
@@ -86,6 +137,12 @@ impl LowerCsc {
         }
     }
 }
+
+/// Where the parts of [`LowerCsc::permuted`] write their rows (disjoint slots).
+struct RowsOut(*mut u32);
+
+// SAFETY: see `RowsOut`.
+unsafe impl Sync for RowsOut {}
 
 /// The supernodal structure the factorisation needs: supernode `s` has the columns
 /// `begin[s]..begin[s + 1]`, the off-diagonal rows `rows[row_ptr[s]..row_ptr[s + 1]]`
