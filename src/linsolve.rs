@@ -759,7 +759,7 @@ impl SaddleSymbolic {
                 rows: &self.layout.rows,
                 val_ptr: &self.layout.val_ptr,
             };
-            schur = crate::supernodal::factorise(&st, &lower, l, par, Some(n))
+            schur = crate::supernodal::factorise(&st, lower, l, par, Some(n))
                 .map_err(|pivot| FactorError::NotPositiveDefinite { pivot, n })?;
         } else {
             let mut values = Vec::with_capacity(self.row_idx.len());

@@ -384,7 +384,7 @@ impl Work {
 /// Where [`available`] is false.
 pub fn factorise(
     st: &Structure,
-    a: &LowerCsc,
+    a: LowerCsc,
     l: &mut [f64],
     par: Par,
     schur_from: Option<usize>,
@@ -414,7 +414,7 @@ pub fn factorise(
         .map(|(n, s)| Schur {
             s,
             kk: n - st.begin[s],
-            w: crate::linsolve::zeros_in_parallel(size - n, size - n),
+            w: None,
         });
     // One set of working arrays per thread (the row map alone is 8 bytes per row).
     let works: Vec<std::sync::Mutex<Work>> = (0..rayon::current_num_threads().max(1))
@@ -433,7 +433,7 @@ pub fn factorise(
                 unsafe {
                     supernode(
                         st,
-                        a,
+                        Some(&a),
                         &schedule,
                         &values,
                         s,
@@ -458,12 +458,22 @@ pub fn factorise(
         schedule.top.len()
     ));
     let mut work = Work::new(size, max_cols, par);
+    let mut a = Some(a);
     for &s in &schedule.top {
+        if schur.as_ref().is_some_and(|w| w.s == s) {
+            // The root, last: its columns of `a` now, and `a` freed before its dense block
+            // is worked on (the peak memory of the run at L7).
+            let root = a.take().expect("the root is the last supernode");
+            // SAFETY: the root is this task's, and has no off-diagonal rows.
+            scatter(st, &root, s, &work.local, unsafe {
+                values.get_mut(st.val_ptr[s]..st.val_ptr[s + 1])
+            });
+        }
         // SAFETY: the top supernodes one after the other, after every subtree.
         unsafe {
             supernode(
                 st,
-                a,
+                a.as_ref(),
                 &schedule,
                 &values,
                 s,
@@ -474,7 +484,7 @@ pub fn factorise(
             )?
         };
     }
-    Ok(schur.map(|w| w.w))
+    Ok(schur.and_then(|w| w.w))
 }
 
 /// Factorises supernode `s`: its columns of `a`, the updates of its descendants in ascending
@@ -487,7 +497,7 @@ pub fn factorise(
 #[allow(clippy::too_many_arguments)]
 unsafe fn supernode(
     st: &Structure,
-    a: &LowerCsc,
+    a: Option<&LowerCsc>,
     schedule: &Schedule,
     values: &Values,
     s: usize,
@@ -505,20 +515,8 @@ unsafe fn supernode(
     }
     // SAFETY: `s`'s values are this task's (the caller's contract).
     let ls = unsafe { values.get_mut(st.val_ptr[s]..st.val_ptr[s + 1]) };
-    for j in s_start..s_end {
-        let col = (j - s_start) * s_nrows;
-        for p in a.col_ptr[j]..a.col_ptr[j + 1] {
-            let i = a.row_idx[p] as usize;
-            if i < j {
-                continue;
-            }
-            let ix = if i >= s_end {
-                work.local[i]
-            } else {
-                i - s_start
-            };
-            ls[col + ix] += a.values[p];
-        }
+    if let Some(a) = a {
+        scatter(st, a, s, &work.local, ls);
     }
     let desc = schedule.descendants(s);
     let chunks = if split && s_ncols >= SPLIT_COLUMNS {
@@ -618,25 +616,20 @@ unsafe fn supernode(
 struct Schur {
     s: usize,
     kk: usize,
-    w: faer::Mat<f64>,
+    w: Option<faer::Mat<f64>>,
 }
 
 impl Schur {
-    /// `w = −A_MM` from the supernode's block `a` as its descendants left it (lower triangle).
+    /// `w = −A_MM` from the supernode's block `a` as its descendants left it (lower triangle,
+    /// in fresh memory written on rayon's threads).
     fn copy_block(&mut self, a: faer::MatRef<'_, f64>) {
-        use rayon::prelude::*;
         let kk = self.kk;
-        self.w
-            .par_col_chunks_mut(64)
-            .enumerate()
-            .for_each(|(b, mut cols)| {
-                for c in 0..cols.ncols() {
-                    let j = b * 64 + c;
-                    for i in j..cols.nrows() {
-                        cols[(i, c)] = -a[(kk + i, kk + j)];
-                    }
-                }
-            });
+        let m = a.nrows() - kk;
+        self.w = Some(crate::linsolve::mat_filled(m, m, true, |j, col| {
+            for i in j..m {
+                col[i] = -a[(kk + i, kk + j)];
+            }
+        }));
     }
 
     /// `w += L_MK D_K L_MKᵀ` from the factorised block `l` (unit lower `L` with `D` on its
@@ -644,14 +637,17 @@ impl Schur {
     fn eliminate_leading(&mut self, l: faer::MatRef<'_, f64>, par: Par) {
         use faer::linalg::matmul::triangular::{BlockStructure, matmul};
         let kk = self.kk;
+        let Some(w) = self.w.as_mut() else {
+            return;
+        };
         if kk == 0 {
             return;
         }
-        let m = self.w.nrows();
+        let m = w.nrows();
         let l_mk = l.get(kk.., ..kk);
         let b = faer::Mat::<f64>::from_fn(m, kk, |i, k| l_mk[(i, k)] * l[(k, k)]);
         matmul(
-            self.w.as_mut(),
+            w.as_mut(),
             BlockStructure::TriangularLower,
             faer::Accum::Add,
             b.as_ref(),
@@ -661,6 +657,24 @@ impl Schur {
             1.0,
             par,
         );
+    }
+}
+
+/// Adds the columns of `a` in supernode `s` to its values `ls` (`local`: the local row of each
+/// of its off-diagonal rows).
+fn scatter(st: &Structure, a: &LowerCsc, s: usize, local: &[usize], ls: &mut [f64]) {
+    let (s_start, s_end) = (st.begin[s], st.begin[s + 1]);
+    let s_nrows = (s_end - s_start) + st.pattern(s).len();
+    for j in s_start..s_end {
+        let col = (j - s_start) * s_nrows;
+        for p in a.col_ptr[j]..a.col_ptr[j + 1] {
+            let i = a.row_idx[p] as usize;
+            if i < j {
+                continue;
+            }
+            let ix = if i >= s_end { local[i] } else { i - s_start };
+            ls[col + ix] += a.values[p];
+        }
     }
 }
 
