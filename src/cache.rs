@@ -569,7 +569,8 @@ impl WritableSection {
     /// Faults the section's pages in for writing, in parts on rayon's threads
     /// (`MADV_POPULATE_WRITE`, Linux 5.14 on): the pages of a new file read as zeros, so this
     /// is the parallel first touch without writing the zeros again. `false` where the kernel
-    /// refuses it (the caller then writes the zeros).
+    /// refuses it (the caller then writes the zeros). Zeros only on a [`Draft`]'s new file
+    /// (`create_new`, blocks reserved), which is the only section of this type.
     pub fn populate(&self) -> bool {
         #[cfg(target_os = "linux")]
         {

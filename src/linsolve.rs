@@ -34,7 +34,8 @@ fn sym<'a>(
 
 /// Whether the saddle-point factorisations run on the elimination tree's schedule
 /// ([`crate::supernodal`]): where its kernel is available, unless `STICKSLIP_FACTOR=faer`
-/// asks for faer's own loop (the same bits; for comparisons).
+/// asks for faer's own loop (for comparisons: the same factor, but `W` formed by the product
+/// rather than copied from the factorisation, so different last bits downstream).
 pub fn tree_scheduled() -> bool {
     crate::supernodal::available()
         && std::env::var("STICKSLIP_FACTOR").map_or(true, |v| v != "faer")
@@ -761,6 +762,9 @@ impl SaddleSymbolic {
             };
             schur = crate::supernodal::factorise(&st, lower, l, par, Some(n))
                 .map_err(|pivot| FactorError::NotPositiveDefinite { pivot, n })?;
+            if schur.is_none() {
+                crate::trace::mark("factor: constraint block not in the root (W by the product)");
+            }
         } else {
             let mut values = Vec::with_capacity(self.row_idx.len());
             values.extend_from_slice(&k_values[..kn]);
@@ -1654,19 +1658,15 @@ mod tests {
         let (w, c) = tree.delassus(true).unwrap();
         let (w_product, c_product) = faer.delassus(true).unwrap();
         let wmax = (0..m).map(|i| w[(i, i)].abs()).fold(0.0, f64::max);
-        let mut differ = 0;
         for j in 0..m {
             for i in 0..m {
                 assert_eq!(w[(i, j)].to_bits(), w[(j, i)].to_bits(), "symmetric");
                 let d = (w[(i, j)] - w_product[(i, j)]).abs();
                 assert!(d <= 1e-13 * wmax, "W[{i},{j}] differs by {d:e}");
-                differ += (d > 0.0) as usize;
                 let (c, cp) = (c.as_ref().unwrap(), c_product.as_ref().unwrap());
                 assert_eq!(c[(i, j)].to_bits(), cp[(i, j)].to_bits(), "C[{i},{j}]");
             }
         }
-        // Two computations, not one: they differ in the last bits somewhere.
-        assert!(differ > 0);
         for (i, j) in [(0, 0), (3, 17), (60, 61), (119, 2)] {
             let mut x = vec![0.0; n];
             y[j].iter().for_each(|&(r, v)| x[r] += v);

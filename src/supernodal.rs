@@ -18,7 +18,7 @@
 //! factorisation at L5 was no faster than the 1-thread one, with ~180 000 futex calls at L7).
 //!
 //! The values are those of faer's loop with sequential kernels, bit for bit
-//! (`tests::the_factor_is_faers_bit_for_bit`), and do not depend on the number of threads:
+//! (`linsolve::tests::the_tree_scheduled_factor_is_faers_bit_for_bit`), and do not depend on the number of threads:
 //! the partition into subtrees is fixed by the tree alone, and every update is a sequential
 //! kernel call on its own columns.
 //!
@@ -69,7 +69,6 @@ impl LowerCsc {
                     .partition_point(|&p| p < t * nnz_in / PARTS)
                     .min(size)
             })
-            .map(|c| c.min(size))
             .collect();
         let parts: Vec<(usize, usize)> = bounds.windows(2).map(|w| (w[0], w[1])).collect();
         // Each part's entries per destination column, then their offsets in it.
@@ -141,7 +140,7 @@ impl LowerCsc {
 /// Where the parts of [`LowerCsc::permuted`] write their rows (disjoint slots).
 struct RowsOut(*mut u32);
 
-// SAFETY: see `RowsOut`.
+// SAFETY: the parts write disjoint slots (`LowerCsc::permuted`).
 unsafe impl Sync for RowsOut {}
 
 /// The supernodal structure the factorisation needs: supernode `s` has the columns
@@ -155,6 +154,33 @@ pub struct Structure<'a> {
 }
 
 impl Structure<'_> {
+    /// Panics unless the supernodes tile the columns in order, each pattern is ascending and
+    /// below its supernode, and each supernode's values have its shape, one after the other.
+    fn check(&self) {
+        let nsup = self.n_supernodes();
+        assert!(self.row_ptr.len() == nsup + 1 && self.val_ptr.len() == nsup + 1);
+        assert!(self.begin.first() == Some(&0) && self.val_ptr.first() == Some(&0));
+        for s in 0..nsup {
+            assert!(self.begin[s] < self.begin[s + 1], "supernode {s} is empty");
+            let p = self.pattern(s);
+            assert!(
+                p.windows(2).all(|w| w[0] < w[1])
+                    && p.first().is_none_or(|&r| r >= self.begin[s + 1]),
+                "supernode {s}'s rows are not ascending below it"
+            );
+            assert!(
+                p.last().is_none_or(|&r| r < *self.begin.last().unwrap()),
+                "supernode {s} has a row outside the matrix"
+            );
+            let n = self.ncols(s);
+            assert_eq!(
+                self.val_ptr[s + 1] - self.val_ptr[s],
+                n * (n + p.len()),
+                "supernode {s}'s values"
+            );
+        }
+    }
+
     fn n_supernodes(&self) -> usize {
         self.begin.len() - 1
     }
@@ -277,7 +303,7 @@ impl Schedule {
             open.extend_from_slice(&children[s]);
         }
         open.sort_by(|&a, &b| work[b].total_cmp(&work[a]).then(a.cmp(&b)));
-        let subtrees = open
+        let subtrees: Vec<Vec<usize>> = open
             .iter()
             .map(|&root| {
                 let mut nodes = Vec::new();
@@ -291,6 +317,22 @@ impl Schedule {
             })
             .collect();
         top.sort_unstable();
+        // Each subtree holds the descendants of its supernodes (its task reads no other).
+        let mut tree_of = vec![usize::MAX; nsup];
+        for (t, nodes) in subtrees.iter().enumerate() {
+            for &s in nodes {
+                tree_of[s] = t;
+            }
+        }
+        for (t, nodes) in subtrees.iter().enumerate() {
+            for &s in nodes {
+                let d = &desc[desc_ptr[s]..desc_ptr[s + 1]];
+                assert!(
+                    d.iter().all(|&d| tree_of[d as usize] == t),
+                    "supernode {s}'s descendants are not in its subtree"
+                );
+            }
+        }
         Schedule {
             desc_ptr,
             desc,
@@ -322,7 +364,6 @@ struct Values {
 // SAFETY: see `Values`; the schedule gives every supernode to one task, after all of its
 // descendants are finished.
 unsafe impl Sync for Values {}
-unsafe impl Send for Values {}
 
 impl Values {
     /// The values `range`.
@@ -371,8 +412,9 @@ impl Work {
 }
 
 /// The numeric factorisation of `a` (its lower triangle in the factor's numbering) into `l`
-/// (zeros on entry, [`Structure::val_ptr`]'s last length): `Err(column)` at a zero pivot,
-/// as faer reports it. `par` is the parallelism of the top supernodes' dense kernels; the
+/// (zeros on entry, [`Structure::val_ptr`]'s last length): `Err(column)` at a zero pivot
+/// (the first in the order the supernodes ran, which may differ from faer's when several
+/// fail). `par` is the parallelism of the top supernodes' dense kernels; the
 /// subtrees and the updates use all of rayon's threads. With `schur_from = Some(n)`, also
 /// the Schur complement of the trailing columns `n..` (its lower triangle, negated:
 /// `Y K̂⁻¹ Yᵀ` for the saddle-point matrix of `K̂` and `Y`) where they all lie in the last
@@ -398,6 +440,8 @@ pub fn factorise(
     let size = *st.begin.last().unwrap_or(&0);
     assert_eq!(l.len(), *st.val_ptr.last().unwrap_or(&0));
     assert_eq!(a.col_ptr.len(), size + 1);
+    st.check();
+    debug_assert!(l.iter().step_by(4096).all(|&x| x == 0.0), "zeros on entry");
     let schedule = Schedule::of(st);
     let max_cols = (0..nsup).map(|s| st.ncols(s)).max().unwrap_or(0);
     let values = Values {
@@ -426,7 +470,24 @@ pub fn factorise(
         .par_iter()
         .map(|nodes| {
             let i = rayon::current_thread_index().unwrap_or(0) % works.len();
-            let mut work = works[i].lock().unwrap_or_else(|e| e.into_inner());
+            // This thread's arrays; fresh ones should it ever run two subtrees at once (a
+            // subtree's work calls nothing that lets rayon start another task on its thread).
+            let mut own;
+            let mut fresh;
+            let work: &mut Work = match works[i].try_lock() {
+                Ok(w) => {
+                    own = w;
+                    &mut own
+                }
+                Err(std::sync::TryLockError::Poisoned(e)) => {
+                    own = e.into_inner();
+                    &mut own
+                }
+                Err(std::sync::TryLockError::WouldBlock) => {
+                    fresh = Work::new(size, max_cols, Par::Seq);
+                    &mut fresh
+                }
+            };
             for &s in nodes {
                 // SAFETY: this task alone factorises the subtree's supernodes, whose
                 // descendants are in the subtree and earlier in `nodes`.
@@ -437,7 +498,7 @@ pub fn factorise(
                         &schedule,
                         &values,
                         s,
-                        &mut work,
+                        work,
                         Par::Seq,
                         false,
                         None,
@@ -673,6 +734,7 @@ fn scatter(st: &Structure, a: &LowerCsc, s: usize, local: &[usize], ls: &mut [f6
                 continue;
             }
             let ix = if i >= s_end { local[i] } else { i - s_start };
+            assert!(ix < s_nrows, "an entry outside supernode {s}'s pattern");
             ls[col + ix] += a.values[p];
         }
     }
@@ -733,6 +795,12 @@ unsafe fn update(
     );
     col_idx.clear();
     col_idx.extend(d_pattern[lo..lo + mid].iter().map(|&r| r - s_start));
+    // Every row inside `s`'s block (a row of `d` below `s` that is not in `s`'s pattern would
+    // be written outside it), as faer's call asserts.
+    assert!(
+        row_idx.iter().all(|&r| r < s_nrows),
+        "supernode {d}'s rows are not in supernode {s}'s pattern"
+    );
     // SAFETY: `d` is finished (the caller's contract).
     let ld = unsafe { values.get(st.val_ptr[d]..st.val_ptr[d + 1]) };
     let nrows = d_pattern.len() - lo;
