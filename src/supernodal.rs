@@ -461,8 +461,10 @@ pub fn factorise(
             w: None,
         });
     // One set of working arrays per thread (the row map alone is 8 bytes per row).
-    let works: Vec<std::sync::Mutex<Work>> = (0..rayon::current_num_threads().max(1))
-        .map(|_| std::sync::Mutex::new(Work::new(size, max_cols, Par::Seq)))
+    // One set of working arrays per thread that runs a subtree (the row map alone is 8 bytes
+    // per row), made on its first subtree.
+    let works: Vec<std::sync::Mutex<Option<Work>>> = (0..rayon::current_num_threads().max(1))
+        .map(|_| std::sync::Mutex::new(None))
         .collect();
     // The subtrees, each on one thread; the first failure by supernode is the one reported.
     let failed = schedule
@@ -474,7 +476,7 @@ pub fn factorise(
             // subtree's work calls nothing that lets rayon start another task on its thread).
             let mut own;
             let mut fresh;
-            let work: &mut Work = match works[i].try_lock() {
+            let slot: &mut Option<Work> = match works[i].try_lock() {
                 Ok(w) => {
                     own = w;
                     &mut own
@@ -484,10 +486,11 @@ pub fn factorise(
                     &mut own
                 }
                 Err(std::sync::TryLockError::WouldBlock) => {
-                    fresh = Work::new(size, max_cols, Par::Seq);
+                    fresh = None;
                     &mut fresh
                 }
             };
+            let work = slot.get_or_insert_with(|| Work::new(size, max_cols, Par::Seq));
             for &s in nodes {
                 // SAFETY: this task alone factorises the subtree's supernodes, whose
                 // descendants are in the subtree and earlier in `nodes`.
