@@ -348,7 +348,8 @@ impl Schedule {
 
 /// The shape of the schedule of `st` (for tests): the number of subtrees, the number of top
 /// supernodes and the widest top supernode's columns.
-pub fn schedule_shape(st: &Structure) -> (usize, usize, usize) {
+#[cfg(test)]
+pub(crate) fn schedule_shape(st: &Structure) -> (usize, usize, usize) {
     let sc = Schedule::of(st);
     let widest = sc.top.iter().map(|&s| st.ncols(s)).max().unwrap_or(0);
     (sc.subtrees.len(), sc.top.len(), widest)
@@ -460,7 +461,6 @@ pub fn factorise(
             kk: n - st.begin[s],
             w: None,
         });
-    // One set of working arrays per thread (the row map alone is 8 bytes per row).
     // One set of working arrays per thread that runs a subtree (the row map alone is 8 bytes
     // per row), made on its first subtree.
     let works: Vec<std::sync::Mutex<Option<Work>>> = (0..rayon::current_num_threads().max(1))
@@ -592,7 +592,7 @@ unsafe fn supernode(
         ptr: ls.as_mut_ptr(),
         len: ls.len(),
     };
-    // The updates and the copy of the columns `c0..c1`.
+    // The descendants' updates of the columns `c0..c1`.
     let columns = |(c0, c1): (usize, usize),
                    local: &[usize],
                    row_idx: &mut Vec<usize>,
