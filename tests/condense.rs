@@ -358,6 +358,57 @@ fn the_writer_with_the_driver_helping_writes_what_one_step_at_a_time_writes() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A writer whose queue fills (the driver hands steps over faster than they are written, as
+/// in a run that writes every step) has the driver's thread prepare the last steps waiting
+/// instead of waiting for the writer: the files are those of one step at a time, byte for byte.
+#[test]
+fn a_full_queue_has_the_driver_prepare_steps_with_the_same_files() {
+    use stickslip::output::series::{Background, Series};
+    let (model, steps) = cm_steps_on_l1();
+    assert!(steps.len() >= 6, "{} steps", steps.len());
+    let dir = tempdir("writer-full");
+    let (one, full) = (dir.join("one"), dir.join("full"));
+    std::fs::create_dir_all(&one).unwrap();
+    let mut series = Series::new(&model, &one, "cm", false);
+    for s in &steps {
+        series.write(vec![step_output(s, None)]).unwrap();
+    }
+    // With a queue of one step, the second step handed over while the writer prepares the
+    // first fills it; tried again (into a clean directory) the rare time the writer keeps up.
+    let mut during_sends = 0;
+    for _ in 0..5 {
+        let _ = std::fs::remove_dir_all(&full);
+        std::fs::create_dir_all(&full).unwrap();
+        during_sends = std::thread::scope(|scope| {
+            let mut writer =
+                Background::spawn(scope, Series::new(&model, &full, "cm", false)).with_queue(1);
+            for s in &steps {
+                writer.send(step_output(s, None)).unwrap();
+            }
+            let during = writer.prepared_here();
+            writer.finish().unwrap();
+            during
+        });
+        if during_sends > 0 {
+            break;
+        }
+    }
+    assert!(
+        during_sends > 0,
+        "the driver's thread prepared no step in five tries"
+    );
+    let names = file_names(&one);
+    assert_eq!(names.len(), 3 * steps.len() + 1, "{names:?}");
+    assert_eq!(file_names(&full), names);
+    for name in &names {
+        assert!(
+            std::fs::read(one.join(name)).unwrap() == std::fs::read(full.join(name)).unwrap(),
+            "{name} differs between one-step writes and a full queue"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A writer given up without `Background::finish` (the driver returned early with an error, or
 /// unwinds) still ends — the thread scope does not wait for it for ever — after writing the
 /// steps it was handed.

@@ -7,10 +7,11 @@
 //! the files, in exactly the order, that writing in the loop would, so a run's files do not
 //! depend on it. When it falls behind it takes the queued steps together (up to [`BATCH`]):
 //! their displacement fields come from one block solve (which reads the factor once for all,
-//! and gives each field bit for bit). Once the driver has solved its last step it prepares the
-//! last steps still waiting on its own thread ([`Background::help`]; on all threads when the
-//! writer has caught up) and hands them back, and the writer puts them in
-//! place in their turn. Each array goes to the file
+//! and gives each field bit for bit). When the queue is full (a run that writes more than it
+//! solves) and once the driver has solved its last step, the driver prepares the last steps
+//! still waiting on its own thread ([`Background::help`]; at the end on all threads when the
+//! writer has caught up) and hands them back, and the writer puts them in place in their
+//! turn. Each array goes to the file
 //! from its own memory. Its first error stops it; the driver sees that error at its next step,
 //! and stops.
 
@@ -452,7 +453,8 @@ impl Shared {
 }
 
 /// A [`Series`] written on a thread of its own, fed through a queue of [`QUEUE`] steps: the
-/// driver hands it a step and goes on, and waits only when the queue is full. The writer takes
+/// driver hands it a step and goes on; when the queue is full it prepares the last steps
+/// waiting itself and hands them back (as at the end of the run), rather than wait. The writer takes
 /// the steps from the front of the queue, up to [`BATCH`] waiting together (one block solve
 /// for their fields). When the driver has no more steps to solve it takes the last of the
 /// steps still waiting and prepares them itself ([`Self::help`]), so that both cores
@@ -464,6 +466,10 @@ pub struct Background<'scope, 'env> {
     handle: Option<ScopedJoinHandle<'scope, Result<f64, RunError>>>,
     /// Seconds the caller spent waiting for the writer.
     wait: f64,
+    /// Steps waiting in the queue at most ([`QUEUE`] unless set, [`Self::with_queue`]).
+    queue: usize,
+    /// Steps the caller's thread prepared (in [`Self::send`] and [`Self::help`]).
+    prepared_here: usize,
 }
 
 impl<'scope, 'env> Background<'scope, 'env> {
@@ -495,7 +501,21 @@ impl<'scope, 'env> Background<'scope, 'env> {
             bodies,
             handle: Some(handle),
             wait: 0.0,
+            queue: QUEUE,
+            prepared_here: 0,
         }
+    }
+
+    /// With at most `steps` (at least one) waiting in the queue instead of [`QUEUE`].
+    pub fn with_queue(mut self, steps: usize) -> Self {
+        self.queue = steps.max(1);
+        self
+    }
+
+    /// Steps prepared on the caller's thread so far, while the queue was full
+    /// ([`Self::send`]) or at the end ([`Self::help`]).
+    pub fn prepared_here(&self) -> usize {
+        self.prepared_here
     }
 
     /// The writer's error if it has stopped on one (it stops only on an error while steps
@@ -514,8 +534,22 @@ impl<'scope, 'env> Background<'scope, 'env> {
         self.check()?;
         let t = Instant::now();
         let mut q = self.shared.lock();
-        while !q.stopped && q.waiting_steps() >= QUEUE {
-            q = self.shared.wait(q);
+        while !q.stopped && q.waiting_steps() >= self.queue {
+            // The writer is behind (a run that writes more than it solves, such as every
+            // step of Fig. 2): this thread prepares the last steps waiting rather than idle.
+            drop(q);
+            match self.prepare_last(false) {
+                Some(n) => {
+                    self.prepared_here += n;
+                    q = self.shared.lock();
+                }
+                None => {
+                    q = self.shared.lock();
+                    if !q.stopped && q.waiting_steps() >= self.queue {
+                        q = self.shared.wait(q);
+                    }
+                }
+            }
         }
         let stopped = q.stopped;
         if !stopped {
@@ -542,77 +576,84 @@ impl<'scope, 'env> Background<'scope, 'env> {
         if self.handle.is_none() {
             return prepared_here;
         }
+        self.shared.lock().closed = true;
+        self.shared.changed.notify_all();
+        while let Some(n) = self.prepare_last(true) {
+            prepared_here += n;
+        }
+        self.prepared_here += prepared_here;
+        prepared_here
+    }
+
+    /// Takes the last run of steps waiting in the queue (those after it, if any, are taken
+    /// already), up to a batch, puts a marker in their place, prepares them on this thread and
+    /// hands them back to the writer: the number of steps, or `None` when none waits or the
+    /// writer has stopped.
+    ///
+    /// While the writer prepares steps of its own, all of them up to a batch, in one block
+    /// solve (at the end of Fig. 2 on L5 the writer prepares two steps and two wait: taken one
+    /// by one, each cost a sweep of the factor, 15 and 17 ms, where the two together took
+    /// 28 ms). At the end of the run (`end`) with the writer not preparing steps (it has
+    /// caught up, as on L7, or only puts files in place), the later half of them, on all
+    /// threads, and the writer takes the earlier.
+    fn prepare_last(&self, end: bool) -> Option<usize> {
         let shared = &self.shared;
-        shared.lock().closed = true;
-        shared.changed.notify_all();
-        loop {
-            // The last run of steps waiting in the queue (those after it, if any, are taken
-            // already): its last steps, up to a batch, in place of which goes a marker. While
-            // the writer prepares steps of its own, all of them up to a batch, in one block
-            // solve (at the end of Fig. 2 on L5 the writer prepares two steps and two wait:
-            // taken one by one, each cost a sweep of the factor, 15 and 17 ms, where the
-            // two together took 28 ms); else the later half, and the writer takes the
-            // earlier.
-            let (id, steps, spread) = {
-                let mut q = shared.lock();
-                if q.stopped {
-                    return prepared_here;
-                }
-                let Some(end) = q
-                    .items
-                    .iter()
-                    .rposition(|i| matches!(i, Item::Step(_)))
-                    .map(|k| k + 1)
-                else {
-                    return prepared_here;
-                };
-                let start = q
-                    .items
-                    .range(..end)
-                    .rposition(|i| !matches!(i, Item::Step(_)))
-                    .map_or(0, |k| k + 1);
-                let take = if q.preparing {
-                    (end - start).min(BATCH)
-                } else {
-                    (end - start).div_ceil(2).min(BATCH)
-                };
-                let id = q.next_id;
-                q.next_id += 1;
-                let steps: Vec<StepOutput> = q
-                    .items
-                    .drain(end - take..end)
-                    .map(|i| match i {
-                        Item::Step(s) => *s,
-                        Item::Taken(_) => unreachable!("a run of steps"),
-                    })
-                    .collect();
-                q.items.insert(end - take, Item::Taken(id));
-                // With the writer not preparing steps of its own (it has caught up, as on L7,
-                // or only puts files in place), its core is free: these steps are prepared on
-                // all threads.
-                (id, steps, !q.preparing)
-            };
-            prepared_here += steps.len();
-            let bodies = &self.bodies;
-            let prepared = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                bodies.prepare(steps, spread)
-            })) {
-                Ok(p) => p,
-                Err(panic) => {
-                    // The writer would wait for these steps for ever: it stops first.
-                    shared.lock().stopped = true;
-                    shared.changed.notify_all();
-                    std::panic::resume_unwind(panic)
-                }
-            };
+        let (id, steps, spread) = {
             let mut q = shared.lock();
             if q.stopped {
-                prepared.discard();
-                return prepared_here;
+                return None;
             }
-            q.done.insert(id, prepared);
+            let last = q
+                .items
+                .iter()
+                .rposition(|i| matches!(i, Item::Step(_)))
+                .map(|k| k + 1)?;
+            let first = q
+                .items
+                .range(..last)
+                .rposition(|i| !matches!(i, Item::Step(_)))
+                .map_or(0, |k| k + 1);
+            let spread = end && !q.preparing;
+            let take = if spread {
+                (last - first).div_ceil(2).min(BATCH)
+            } else {
+                (last - first).min(BATCH)
+            };
+            let id = q.next_id;
+            q.next_id += 1;
+            let steps: Vec<StepOutput> = q
+                .items
+                .drain(last - take..last)
+                .map(|i| match i {
+                    Item::Step(s) => *s,
+                    Item::Taken(_) => unreachable!("a run of steps"),
+                })
+                .collect();
+            q.items.insert(last - take, Item::Taken(id));
             shared.changed.notify_all();
+            (id, steps, spread)
+        };
+        let n = steps.len();
+        let bodies = &self.bodies;
+        let prepared = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            bodies.prepare(steps, spread)
+        })) {
+            Ok(p) => p,
+            Err(panic) => {
+                // The writer would wait for these steps for ever: it stops first.
+                shared.lock().stopped = true;
+                shared.changed.notify_all();
+                std::panic::resume_unwind(panic)
+            }
+        };
+        let mut q = shared.lock();
+        if q.stopped {
+            prepared.discard();
+            return None;
         }
+        q.done.insert(id, prepared);
+        shared.changed.notify_all();
+        Some(n)
     }
 
     /// Waits for the writer to put every step in place (after [`Self::help`]): (its busy
