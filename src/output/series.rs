@@ -66,8 +66,11 @@ pub struct StepOutput {
     pub reply: Option<SyncSender<Vec<f64>>>,
 }
 
-/// Steps the writer (or the driver's thread, at the end) prepares at once at most.
-pub const BATCH: usize = 2;
+/// Steps the writer (or the driver's thread) prepares at once at most: their fields in one
+/// sweep of the factor. Four rather than two: Fig. 2 on L5 writing every step, whose queue
+/// stays full, 1.370 → 1.310 s (`benches/ab.sh 6`, B/A 0.956); the shipped Fig. 2 (five written
+/// steps) does not change (wall − floor 0.214 → 0.213 s, 10 pairs).
+pub const BATCH: usize = 4;
 
 /// Steps that may wait in the writer's queue before the driver waits for it.
 pub const QUEUE: usize = 8;
