@@ -317,15 +317,7 @@ fn the_writer_with_the_driver_helping_writes_what_one_step_at_a_time_writes() {
             .zip(&own)
             .all(|(a, b)| a.to_bits() == b.to_bits())
     );
-    let names = file_names(&one);
-    assert_eq!(names.len(), 3 * steps.len() + 1, "{names:?}");
-    assert_eq!(file_names(&helped), names);
-    for name in &names {
-        assert!(
-            std::fs::read(one.join(name)).unwrap() == std::fs::read(helped.join(name)).unwrap(),
-            "{name} differs between one-step and helped writes"
-        );
-    }
+    assert_same_files(&one, &helped, steps.len(), "helped writes");
     // A step in the middle that cannot be put in place (a directory where its bodies file
     // goes): the error names it, the steps before it are whole, nothing of the later ones.
     let bad = steps[steps.len() / 2].0;
@@ -356,6 +348,20 @@ fn the_writer_with_the_driver_helping_writes_what_one_step_at_a_time_writes() {
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The files of `n_steps` steps written one at a time into `one` (a bodies and a contact `.vtu`
+/// and a contact table per step, and the `.pvd`) are those in `other`, byte for byte.
+fn assert_same_files(one: &std::path::Path, other: &std::path::Path, n_steps: usize, what: &str) {
+    let names = file_names(one);
+    assert_eq!(names.len(), 3 * n_steps + 1, "{names:?}");
+    assert_eq!(file_names(other), names);
+    for name in &names {
+        assert!(
+            std::fs::read(one.join(name)).unwrap() == std::fs::read(other.join(name)).unwrap(),
+            "{name} differs between one-step writes and {what}"
+        );
+    }
 }
 
 /// A writer whose queue fills (the driver hands steps over faster than they are written, as
@@ -397,15 +403,7 @@ fn a_full_queue_has_the_driver_prepare_steps_with_the_same_files() {
         during_sends > 0,
         "the driver's thread prepared no step in five tries"
     );
-    let names = file_names(&one);
-    assert_eq!(names.len(), 3 * steps.len() + 1, "{names:?}");
-    assert_eq!(file_names(&full), names);
-    for name in &names {
-        assert!(
-            std::fs::read(one.join(name)).unwrap() == std::fs::read(full.join(name)).unwrap(),
-            "{name} differs between one-step writes and a full queue"
-        );
-    }
+    assert_same_files(&one, &full, steps.len(), "a full queue");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
