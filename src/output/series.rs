@@ -72,7 +72,8 @@ pub struct StepOutput {
 /// steps) does not change (wall − floor 0.214 → 0.213 s, 10 pairs).
 pub const BATCH: usize = 4;
 
-/// Steps that may wait in the writer's queue before the driver waits for it.
+/// Steps that may wait in the writer's queue before the driver prepares the last of them
+/// itself ([`Background::send`]).
 pub const QUEUE: usize = 8;
 
 /// What writing a step's bodies dataset needs, shared by the writer thread and the driver's
@@ -457,9 +458,9 @@ impl Shared {
 
 /// A [`Series`] written on a thread of its own, fed through a queue of [`QUEUE`] steps: the
 /// driver hands it a step and goes on; when the queue is full it prepares the last steps
-/// waiting itself and hands them back (as at the end of the run), rather than wait. The writer takes
-/// the steps from the front of the queue, up to [`BATCH`] waiting together (one block solve
-/// for their fields). When the driver has no more steps to solve it takes the last of the
+/// waiting itself and hands them back (as at the end of the run), rather than wait. The
+/// writer takes the steps from the front of the queue, up to [`BATCH`] waiting together (one
+/// block solve for their fields). When the driver has no more steps to solve it takes the last of the
 /// steps still waiting and prepares them itself ([`Self::help`]), so that both cores
 /// write the last steps; the writer puts them in place in their turn.
 pub struct Background<'scope, 'env> {
@@ -530,9 +531,10 @@ impl<'scope, 'env> Background<'scope, 'env> {
         Ok(())
     }
 
-    /// Hands a step to the writer, waiting while the queue is full; the writer's error if it
-    /// has stopped on one (after which the run stops: nothing more is sent, and
-    /// [`Self::finish`] joins nothing).
+    /// Hands a step to the writer; while the queue is full, this thread prepares the last
+    /// steps waiting (or waits, should none be left to take). The writer's error if it has
+    /// stopped on one (after which the run stops: nothing more is sent, and [`Self::finish`]
+    /// joins nothing).
     pub fn send(&mut self, step: StepOutput) -> Result<(), RunError> {
         self.check()?;
         let t = Instant::now();
