@@ -318,23 +318,46 @@ fn the_writer_with_the_driver_helping_writes_what_one_step_at_a_time_writes() {
             .all(|(a, b)| a.to_bits() == b.to_bits())
     );
     assert_same_files(&one, &helped, steps.len(), "helped writes");
-    // A step in the middle that cannot be put in place (a directory where its bodies file
-    // goes): the error names it, the steps before it are whole, nothing of the later ones.
+    assert_a_failed_step_stops_the_series(
+        &model,
+        &steps,
+        &failed,
+        stickslip::output::series::QUEUE,
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Writes `steps` through a writer with a queue of `queue` steps into `failed`, where a step in
+/// the middle cannot be put in place (a directory where its bodies file goes): the error names
+/// it, no temporary file stays behind, and nothing of the later steps is written.
+fn assert_a_failed_step_stops_the_series(
+    model: &stickslip::model::Model,
+    steps: &[CmStep],
+    failed: &std::path::Path,
+    queue: usize,
+) {
+    use stickslip::output::series::{Background, Series};
+    std::fs::create_dir_all(failed).unwrap();
     let bad = steps[steps.len() / 2].0;
     let bad_name = format!("cm_{bad:04}.vtu");
     std::fs::create_dir_all(failed.join(&bad_name)).unwrap();
     let err = std::thread::scope(|scope| {
-        let mut writer = Background::spawn(scope, Series::new(&model, &failed, "cm", false));
-        for s in &steps {
-            if writer.send(out(s, None)).is_err() {
+        let mut writer =
+            Background::spawn(scope, Series::new(model, failed, "cm", false)).with_queue(queue);
+        // The error comes once: from the send that finds the writer stopped, else at the end.
+        let mut err = None;
+        for s in steps {
+            if let Err(e) = writer.send(step_output(s, None)) {
+                err = Some(e);
                 break;
             }
         }
         let _ = writer.help();
-        writer.finish().unwrap_err()
+        let end = writer.finish();
+        err.or(end.err()).expect("the failed step's error")
     });
     assert!(err.to_string().contains(&bad_name), "{err}");
-    for name in file_names(&failed) {
+    for name in file_names(failed) {
         assert!(
             !name.starts_with('.'),
             "a temporary file stayed behind: {name}"
@@ -347,7 +370,6 @@ fn the_writer_with_the_driver_helping_writes_what_one_step_at_a_time_writes() {
             assert!(k <= bad, "{name} was written after the failed step {bad}");
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The files of `n_steps` steps written one at a time into `one` (a bodies and a contact `.vtu`
@@ -404,6 +426,9 @@ fn a_full_queue_has_the_driver_prepare_steps_with_the_same_files() {
         "the driver's thread prepared no step in five tries"
     );
     assert_same_files(&one, &full, steps.len(), "a full queue");
+    // The same with a step that cannot be put in place: the driver's thread prepares steps
+    // while the writer fails.
+    assert_a_failed_step_stops_the_series(&model, &steps, &dir.join("failed"), 1);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
