@@ -136,6 +136,7 @@ pub fn hertz_a(load: f64, radius: f64, e_star: f64) -> f64 {
 }
 
 /// What the checks read from a finished run.
+#[derive(Clone)]
 pub struct Input<'a> {
     pub model: &'a Model,
     /// The free solution of the last converged step and its traction scale.
@@ -163,29 +164,82 @@ pub fn run_checks(inp: &Input) -> Vec<Check> {
 
 /// The force balance of the recovered field (see the module docs).
 pub fn equilibrium(inp: &Input) -> Check {
-    use crate::dofs::Dof;
-    let model = inp.model;
-    let dofs = &model.dofs;
-    // Each element's nodal forces and the size of the terms summed into them.
-    let per_elem: Vec<([f64; 12], f64)> = model.map_element_forces(inp.u, |f| {
-        let umax = f.ue.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        (f.fe, f.kmax * umax)
-    });
-    let term = per_elem.iter().fold(0.0f64, |m, &(_, v)| m.max(v));
-    // Residual at free DOFs: f_int − loads − contact and pilot forces.
-    let mut res: Vec<f64> = model.f_traction.iter().map(|f| -inp.scale * f).collect();
-    let mut reaction = [0.0; 2];
-    for ((e, _), (fe, _)) in model.elems.iter().zip(&per_elem) {
-        for (a, &n) in model.mesh.triangles[*e].nodes.iter().enumerate() {
-            for c in 0..2 {
-                match dofs.node[n][c] {
-                    Dof::Free(i) => res[i] += fe[2 * a + c],
-                    Dof::Fixed(_) => reaction[c] += fe[2 * a + c],
-                    Dof::Unused => {}
+    equilibrium_many(std::slice::from_ref(inp))
+        .pop()
+        .expect("one check per field")
+}
+
+/// [`equilibrium`] of several fields of one model (a sweep's rows): their element forces in
+/// one pass over the elements, eight fields at a time (each element's geometry read once for
+/// them), on the calling thread. The same numbers as one field at a time.
+pub fn equilibrium_many(inps: &[Input]) -> Vec<Check> {
+    inps.chunks(8)
+        .flat_map(|c| match c.len() {
+            1 => equilibrium_lanes::<1>(c),
+            2 => equilibrium_lanes::<2>(c),
+            3 | 4 => equilibrium_lanes::<4>(c),
+            _ => equilibrium_lanes::<8>(c),
+        })
+        .collect()
+}
+
+/// [`equilibrium_many`] of at most `R` fields of one model (the lanes past them zero). The
+/// fields and the residuals are interleaved (one cache line per DOF for all of them).
+fn equilibrium_lanes<const R: usize>(inps: &[Input]) -> Vec<Check> {
+    let model = inps[0].model;
+    let n_free = model.dofs.n_free();
+    let mut uu: Vec<[f64; R]> = Vec::with_capacity(n_free + model.dofs.prescribed.len());
+    for d in 0..n_free {
+        uu.push(std::array::from_fn(|j| inps.get(j).map_or(0.0, |i| i.u[d])));
+    }
+    uu.extend(model.dofs.prescribed.iter().map(|&p| [p; R]));
+    // Residual at free DOFs: f_int − loads − contact and pilot forces; each element's nodal
+    // forces added in the order of the elements, with the size of the terms summed.
+    let mut res: Vec<[f64; R]> = model
+        .f_traction
+        .iter()
+        .map(|f| std::array::from_fn(|j| inps.get(j).map_or(0.0, |i| -i.scale * f)))
+        .collect();
+    let mut reaction = [[0.0; 2]; R];
+    let mut term = [0.0f64; R];
+    let table = model.element_dof_table();
+    model.each_element_forces(&uu, |i, ue, fe, kmax| {
+        for j in 0..R {
+            let umax = ue.iter().fold(0.0f64, |m, v| m.max(v[j].abs()));
+            term[j] = term[j].max(kmax * umax);
+        }
+        for (k, &d) in table[i].iter().enumerate() {
+            let d = d as usize;
+            if d < n_free {
+                for j in 0..R {
+                    res[d][j] += fe[k][j];
+                }
+            } else if d != u32::MAX as usize {
+                for j in 0..R {
+                    reaction[j][k % 2] += fe[k][j];
                 }
             }
         }
-    }
+    });
+    inps.iter()
+        .enumerate()
+        .map(|(j, inp)| {
+            balance(
+                inp,
+                res.iter().map(|r| r[j]).collect(),
+                reaction[j],
+                term[j],
+            )
+        })
+        .collect()
+}
+
+/// The equilibrium check of a field from its residual `res` at the free DOFs (internal forces
+/// less the loads), the supports' `reaction` and the largest term summed into them.
+fn balance(inp: &Input, mut res: Vec<f64>, reaction: [f64; 2], term: f64) -> Check {
+    use crate::dofs::Dof;
+    let model = inp.model;
+    let dofs = &model.dofs;
     let mut pilot = [0.0; 2];
     if let (Some(st), Some(cm)) = (inp.state, &model.contact) {
         let mut contact_only = st.clone();

@@ -199,6 +199,13 @@ pub struct ForceGeometry {
     mean_divergence: Option<Box<([f64; 12], f64)>>,
 }
 
+impl ForceGeometry {
+    /// The largest entry of the element's `K_e` in magnitude.
+    pub fn kmax(&self) -> f64 {
+        self.kmax
+    }
+}
+
 /// The [`ForceGeometry`] of an element.
 pub fn force_geometry(xe: &[[f64; 2]; 6], mat: &Material) -> ForceGeometry {
     let (l, m) = mat.lame();
@@ -280,6 +287,62 @@ pub fn element_forces_with(
     (f, geo.kmax)
 }
 
+/// [`element_forces_with`] of `R` displacement sets at once (entry `[k][j]`: DOF `k` of set
+/// `j`): the geometry read once for all of them, each lane the same operations in the same
+/// order as the one-set function, so the same bits.
+#[inline(always)]
+pub fn element_forces_lanes<const R: usize>(
+    geo: &ForceGeometry,
+    ue: &[[f64; R]; 12],
+    mat: &Material,
+) -> [[f64; R]; 12] {
+    let (l, m) = mat.lame();
+    let mixed = geo.mean_divergence.is_some();
+    let mut f = [[0.0; R]; 12];
+    for (s, dndx) in geo.s.iter().zip(&geo.dndx) {
+        // `strain_of`, lane by lane.
+        let mut e = [[0.0; R]; 3];
+        for a in 0..6 {
+            let (gx, gy) = (dndx[a][0], dndx[a][1]);
+            for j in 0..R {
+                e[0][j] += gx * ue[2 * a][j];
+                e[1][j] += gy * ue[2 * a + 1][j];
+                e[2][j] += gy * ue[2 * a][j] + gx * ue[2 * a + 1][j];
+            }
+        }
+        // `Material::stress`, or the B part of a mixed element.
+        let mut sig = [[0.0; R]; 3];
+        for j in 0..R {
+            if mixed {
+                sig[0][j] = 2.0 * m * e[0][j];
+                sig[1][j] = 2.0 * m * e[1][j];
+                sig[2][j] = m * e[2][j];
+            } else {
+                sig[0][j] = (l + 2.0 * m) * e[0][j] + l * e[1][j];
+                sig[1][j] = l * e[0][j] + (l + 2.0 * m) * e[1][j];
+                sig[2][j] = m * e[2][j];
+            }
+        }
+        for (a, g) in dndx.iter().enumerate() {
+            let (ax, ay) = (g[0], g[1]);
+            for j in 0..R {
+                f[2 * a][j] += s * (ax * sig[0][j] + ay * sig[2][j]);
+                f[2 * a + 1][j] += s * (ay * sig[1][j] + ax * sig[2][j]);
+            }
+        }
+    }
+    if let Some(md) = &geo.mean_divergence {
+        let (bbar, area) = (&md.0, md.1);
+        for j in 0..R {
+            let theta: f64 = bbar.iter().zip(ue).map(|(b, u)| b * u[j]).sum();
+            for i in 0..12 {
+                f[i][j] += l * area * bbar[i] * theta;
+            }
+        }
+    }
+    f
+}
+
 /// Consistent nodal forces of a body force `b(x)` per unit volume (12 entries).
 pub fn element_body_force(xe: &[[f64; 2]; 6], b: &dyn Fn([f64; 2]) -> [f64; 2]) -> [f64; 12] {
     let mut f = [0.0; 12];
@@ -350,6 +413,73 @@ pub fn nodal_stress_at(
         } else {
             mat.sigma_zz([out[a][0], out[a][1], out[a][2]])
         };
+    }
+    out
+}
+
+/// [`nodal_stress_at`] of `R` displacement sets at once (`ue[k][j]`: DOF `k` of set `j`;
+/// the result `[a][i][j]`: component `i` at node `a` of set `j`): the element's gradients
+/// mapped once for all of them, each lane the same operations in the same order as the
+/// one-set function, so the same bits.
+#[inline(always)]
+pub fn nodal_stress_lanes<const R: usize>(
+    xe: &[[f64; 2]; 6],
+    ue: &[[f64; R]; 12],
+    mat: &Material,
+    d3: &[[[f64; 2]; 6]; 3],
+) -> [[[f64; R]; 4]; 6] {
+    let mixed = mat.is_mixed();
+    let (l, m) = mat.lame();
+    // `element_theta`, lane by lane.
+    let theta: [f64; R] = if mixed {
+        let (b, _) = mean_divergence(xe);
+        std::array::from_fn(|j| b.iter().zip(ue).map(|(b, u)| b * u[j]).sum())
+    } else {
+        [f64::NAN; R]
+    };
+    let g: [[[f64; R]; 4]; 3] = std::array::from_fn(|q| {
+        let (_, dndx) = tri6::gradients(xe, &d3[q]);
+        // `strain_of`, then `Material::stress4`, lane by lane.
+        let mut e = [[0.0; R]; 3];
+        for a in 0..6 {
+            let (gx, gy) = (dndx[a][0], dndx[a][1]);
+            for j in 0..R {
+                e[0][j] += gx * ue[2 * a][j];
+                e[1][j] += gy * ue[2 * a + 1][j];
+                e[2][j] += gy * ue[2 * a][j] + gx * ue[2 * a + 1][j];
+            }
+        }
+        let mut s = [[0.0; R]; 4];
+        for j in 0..R {
+            if mixed {
+                s[0][j] = 2.0 * m * e[0][j] + l * theta[j];
+                s[1][j] = 2.0 * m * e[1][j] + l * theta[j];
+                s[2][j] = m * e[2][j];
+                s[3][j] = l * theta[j];
+            } else {
+                s[0][j] = (l + 2.0 * m) * e[0][j] + l * e[1][j];
+                s[1][j] = l * e[0][j] + (l + 2.0 * m) * e[1][j];
+                s[2][j] = m * e[2][j];
+                s[3][j] = mat.nu * (s[0][j] + s[1][j]);
+            }
+        }
+        s
+    });
+    let mut out = [[[0.0; R]; 4]; 6];
+    for (a, r) in tri6::NODE_REF_COORDS.iter().enumerate() {
+        let s = (r[0] - 1.0 / 6.0) * 2.0;
+        let t = (r[1] - 1.0 / 6.0) * 2.0;
+        let c = [1.0 - s - t, s, t];
+        for j in 0..R {
+            for i in 0..3 {
+                out[a][i][j] = c[0] * g[0][i][j] + c[1] * g[1][i][j] + c[2] * g[2][i][j];
+            }
+            out[a][3][j] = if mixed {
+                g[0][3][j]
+            } else {
+                mat.nu * (out[a][0][j] + out[a][1][j])
+            };
+        }
     }
     out
 }
@@ -427,6 +557,59 @@ mod tests {
                     f[i]
                 );
             }
+        }
+    }
+
+    /// Element forces and nodal stresses of several displacement sets at once (lanes) are
+    /// each set's own, bit for bit, for either kind of element; a zero set gives zeros.
+    #[test]
+    fn lanes_give_the_bits_of_one_set_at_a_time() {
+        fn check<const R: usize>(xe: &[[f64; 2]; 6], mat: &Material) {
+            let sets: [[f64; 12]; R] = std::array::from_fn(|j| {
+                std::array::from_fn(|i| {
+                    if j == 1 {
+                        0.0
+                    } else {
+                        ((i * 37 + j * 13) % 11) as f64 * 1e-3 - 5e-3 + 1e-4 * j as f64
+                    }
+                })
+            });
+            let ue: [[f64; R]; 12] = std::array::from_fn(|k| std::array::from_fn(|j| sets[j][k]));
+            let geo = force_geometry(xe, mat);
+            let fl = element_forces_lanes(&geo, &ue, mat);
+            let d3 = stress_point_gradients();
+            let sl = nodal_stress_lanes(xe, &ue, mat, &d3);
+            for (j, set) in sets.iter().enumerate() {
+                let (f, kmax) = element_forces(xe, set, mat);
+                assert_eq!(kmax.to_bits(), geo.kmax().to_bits());
+                for k in 0..12 {
+                    assert_eq!(
+                        f[k].to_bits(),
+                        fl[k][j].to_bits(),
+                        "force {k} of set {j} of {R}"
+                    );
+                }
+                let s = nodal_stress_at(xe, set, mat, &d3);
+                for a in 0..6 {
+                    for i in 0..4 {
+                        assert_eq!(
+                            s[a][i].to_bits(),
+                            sl[a][i][j].to_bits(),
+                            "stress {i} at node {a} of set {j} of {R}"
+                        );
+                    }
+                }
+            }
+        }
+        let xe = curved_element();
+        for mat in [
+            Material { e: 3.0, nu: 0.25 },
+            Material { e: 2.0, nu: 0.4995 },
+        ] {
+            check::<1>(&xe, &mat);
+            check::<2>(&xe, &mat);
+            check::<4>(&xe, &mat);
+            check::<8>(&xe, &mat);
         }
     }
 

@@ -156,6 +156,94 @@ fn block_recovery_and_kept_element_matrices_equal_the_one_by_one_computation() {
     }
 }
 
+/// Any number of fields recovered together (their columns interleaved, up to eight per read of
+/// the factor, split over the threads or in one sweep), their equilibrium checks eight at a
+/// time and their nodal stresses four at a time give each field's own numbers, bit for bit:
+/// what a sweep's rows and the output writer's batches compute equals one field at a time.
+#[test]
+fn fields_checked_and_stressed_together_equal_one_at_a_time() {
+    use stickslip::checks::{Input, equilibrium, equilibrium_many};
+    let (model, sim) = cm_on_l1(&mut |_| Ok(()));
+    assert!(sim.failure.is_none(), "{:?}", sim.failure);
+    let st = sim.last_state.as_ref().expect("a converged step");
+    // Nine right-hand sides: the last state at several load scales, with its normal forces
+    // scaled, and one with no contact forces at all.
+    let varied: Vec<_> = (0..9)
+        .map(|k| {
+            let mut s = st.clone();
+            let f = if k == 4 { 0.0 } else { 1.0 - 0.1 * k as f64 };
+            s.f_n.iter_mut().for_each(|v| *v *= f);
+            s.f_t.iter_mut().for_each(|v| *v *= f);
+            s
+        })
+        .collect();
+    let states: Vec<(f64, &_)> = varied
+        .iter()
+        .enumerate()
+        .map(|(k, s)| (sim.last_scale * (1.0 - 0.05 * k as f64), s))
+        .collect();
+    let alone: Vec<Vec<f64>> = states
+        .iter()
+        .map(|(scale, s)| model.contact_displacement(*scale, s))
+        .collect();
+    for n in 1..=states.len() {
+        for spread in [true, false] {
+            let block = model.contact_displacements(&states[..n], spread);
+            for (k, u) in block.iter().enumerate() {
+                assert!(
+                    u.iter()
+                        .zip(&alone[k])
+                        .all(|(a, b)| a.to_bits() == b.to_bits()),
+                    "field {k} of {n} recovered together (spread {spread}) differs from its own"
+                );
+            }
+        }
+    }
+    assert_ne!(alone[0], alone[1], "the right-hand sides must differ");
+    let inputs: Vec<Input> = alone
+        .iter()
+        .zip(&states)
+        .map(|(u, (scale, s))| Input {
+            model: &model,
+            u,
+            scale: *scale,
+            state: Some(*s),
+            records: &sim.records,
+            friction: None,
+            equilibrium: None,
+        })
+        .collect();
+    let one: Vec<_> = inputs.iter().map(equilibrium).collect();
+    assert!(
+        one.iter().any(|c| c.value > 0.0),
+        "some residual to compare"
+    );
+    for n in 1..=inputs.len() {
+        for (k, c) in equilibrium_many(&inputs[..n]).iter().enumerate() {
+            assert_eq!(
+                c.value.to_bits(),
+                one[k].value.to_bits(),
+                "check {k} of {n}"
+            );
+            assert_eq!(c.note, one[k].note, "check {k} of {n}");
+        }
+    }
+    let fields: Vec<&[f64]> = alone.iter().map(|u| u.as_slice()).collect();
+    let stresses: Vec<_> = fields
+        .iter()
+        .map(|u| model.nodal_stresses(u, false))
+        .collect();
+    for n in 1..=fields.len() {
+        for (k, s) in model.nodal_stresses_many(&fields[..n]).iter().enumerate() {
+            let same = s
+                .iter()
+                .zip(&stresses[k])
+                .all(|(a, b)| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits()));
+            assert!(same, "stresses of field {k} of {n} differ from its own");
+        }
+    }
+}
+
 /// The shipped Cattaneo–Mindlin case on `vm272_L1`: its model and its simulation (`on_step`
 /// sees every step).
 fn cm_on_l1(

@@ -496,10 +496,26 @@ impl Model {
     /// (32 bytes) looked up in a table the size of the mesh, which was a tenth of the work of
     /// the output writer and the summary on L5.
     pub fn element_u(&self, i: usize, u: &[f64]) -> [f64; 12] {
+        let table = self.element_dof_table();
+        let n_free = self.dofs.n_free();
+        table[i].map(|k| {
+            let k = k as usize;
+            if k < n_free {
+                u[k]
+            } else {
+                self.dofs.prescribed.get(k - n_free).copied().unwrap_or(0.0)
+            }
+        })
+    }
+
+    /// Where each DOF of each element is (of `self.elems`): its index among the free DOFs
+    /// (below [`DofMap::n_free`]), `n_free` plus its index among the prescribed ones, or
+    /// `u32::MAX` for none.
+    pub fn element_dof_table(&self) -> &[[u32; 12]] {
         // Built on the calling thread: a rayon task waiting for this initialisation (the
         // writer's and the driver's threads both compute stresses at the end of a run) must
         // not be the one that would have to run part of it.
-        let table = self.elem_dofs.get_or_init(|| {
+        self.elem_dofs.get_or_init(|| {
             use crate::dofs::Dof;
             let n_free = self.dofs.n_free();
             assert!(
@@ -517,16 +533,80 @@ impl Model {
                     })
                 })
                 .collect()
-        });
-        let n_free = self.dofs.n_free();
-        table[i].map(|k| {
-            let k = k as usize;
-            if k < n_free {
-                u[k]
-            } else {
-                self.dofs.prescribed.get(k - n_free).copied().unwrap_or(0.0)
-            }
         })
+    }
+
+    /// [`Model::nodal_stresses`] of several fields, up to four at a time in one pass over the
+    /// elements on the calling thread (each element's gradients mapped once for them): the
+    /// same bits as one by one.
+    pub fn nodal_stresses_many(&self, us: &[&[f64]]) -> Vec<Vec<[f64; 4]>> {
+        let mut out = Vec::with_capacity(us.len());
+        for group in us.chunks(4) {
+            match group.len() {
+                1 => out.push(self.nodal_stresses(group[0], false)),
+                2 => out.extend(self.nodal_stresses_lanes::<2>(group)),
+                _ => out.extend(self.nodal_stresses_lanes::<4>(group)),
+            }
+        }
+        out
+    }
+
+    /// [`Model::nodal_stresses_many`] of at most `R` fields (the lanes past them zero).
+    fn nodal_stresses_lanes<const R: usize>(&self, us: &[&[f64]]) -> Vec<Vec<[f64; 4]>> {
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::avx2() {
+            // SAFETY: the processor has AVX2 (checked at run time).
+            return unsafe { self.nodal_stresses_lanes_avx2::<R>(us) };
+        }
+        self.nodal_stresses_lanes_body::<R>(us)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn nodal_stresses_lanes_avx2<const R: usize>(
+        &self,
+        us: &[&[f64]],
+    ) -> Vec<Vec<[f64; 4]>> {
+        self.nodal_stresses_lanes_body::<R>(us)
+    }
+
+    #[inline(always)]
+    fn nodal_stresses_lanes_body<const R: usize>(&self, us: &[&[f64]]) -> Vec<Vec<[f64; 4]>> {
+        let d3 = elasticity::stress_point_gradients();
+        let n_free = self.dofs.n_free();
+        // The fields interleaved (one cache line per DOF for all of them), then the
+        // prescribed values, as `element_u` reads them.
+        let mut uu: Vec<[f64; R]> = Vec::with_capacity(n_free + self.dofs.prescribed.len());
+        for d in 0..n_free {
+            uu.push(std::array::from_fn(|j| us.get(j).map_or(0.0, |u| u[d])));
+        }
+        uu.extend(self.dofs.prescribed.iter().map(|&p| [p; R]));
+        let table = self.element_dof_table();
+        let mut acc = vec![[[0.0; R]; 4]; self.mesh.nodes.len()];
+        let mut count = vec![0u32; self.mesh.nodes.len()];
+        for (i, (e, mat)) in self.elems.iter().enumerate() {
+            let ue: [[f64; R]; 12] =
+                std::array::from_fn(|k| uu.get(table[i][k] as usize).copied().unwrap_or([0.0; R]));
+            let s = elasticity::nodal_stress_lanes(&self.mesh.tri_coords(*e), &ue, mat, &d3);
+            for (a, &n) in self.mesh.triangles[*e].nodes.iter().enumerate() {
+                for c in 0..4 {
+                    for j in 0..R {
+                        acc[n][c][j] += s[a][c][j];
+                    }
+                }
+                count[n] += 1;
+            }
+        }
+        (0..us.len())
+            .map(|j| {
+                acc.iter()
+                    .zip(&count)
+                    .map(|(a, &c)| {
+                        std::array::from_fn(|i| if c > 0 { a[i][j] / c as f64 } else { a[i][j] })
+                    })
+                    .collect()
+            })
+            .collect()
     }
 
     /// Nodal stresses (σxx, σyy, σxy, σzz), averaged over the elements around each node; the

@@ -170,7 +170,20 @@ const BODIES_FIELDS: [(&str, u32); 6] = [
 /// The point fields of the bodies dataset at one step: displacement, stresses, von Mises
 /// (`parallel`: the stresses on rayon's threads, else on the calling thread).
 pub fn bodies_fields(model: &Model, u: &[f64], parallel: bool) -> Vec<vtu::Field> {
-    let stress = model.nodal_stresses(u, parallel);
+    fields_with_stress(model, u, model.nodal_stresses(u, parallel))
+}
+
+/// [`bodies_fields`] of several fields, their nodal stresses up to four at a time
+/// ([`Model::nodal_stresses_many`], on the calling thread): the same fields.
+pub fn bodies_fields_many(model: &Model, us: &[&[f64]]) -> Vec<Vec<vtu::Field>> {
+    us.iter()
+        .zip(model.nodal_stresses_many(us))
+        .map(|(u, stress)| fields_with_stress(model, u, stress))
+        .collect()
+}
+
+/// The point fields of a field `u` with its nodal stresses.
+fn fields_with_stress(model: &Model, u: &[f64], stress: Vec<[f64; 4]>) -> Vec<vtu::Field> {
     let n = model.active.iter().filter(|&&a| a).count();
     let mut disp = Vec::with_capacity(n * 3);
     let (mut sxx, mut syy, mut sxy, mut szz, mut vm) = (

@@ -16,7 +16,8 @@
 //! and stops.
 
 use super::fields::{
-    BodiesMesh, bodies_after_point_data, bodies_fields, bodies_vtu, contact_csv, contact_vtu,
+    BodiesMesh, bodies_after_point_data, bodies_fields, bodies_fields_many, bodies_vtu,
+    contact_csv, contact_vtu,
 };
 use super::vtu::Field;
 use super::{PvdEntry, pvd};
@@ -115,7 +116,11 @@ impl Bodies<'_> {
     /// The bytes of the datasets that do not depend on the step (after the point fields) are
     /// written meanwhile on a thread of its own ([`super::Ahead`]), where the file system
     /// allows it; the rest of each file follows once its fields are known. The same bytes.
-    fn prepare(&self, steps: Vec<StepOutput>, spread: bool) -> Prepared {
+    ///
+    /// `late`: whether the other threads have nothing left to do but wait (the driver's run is
+    /// over), asked before each stage: from then on the stage runs on all threads, as with
+    /// `spread` (the same bytes).
+    fn prepare(&self, steps: Vec<StepOutput>, spread: bool, late: &dyn Fn() -> bool) -> Prepared {
         std::thread::scope(|scope| {
             let ahead = (!self.compress).then(|| {
                 let names: Vec<PathBuf> = steps
@@ -127,7 +132,7 @@ impl Bodies<'_> {
                     .spawn_scoped(scope, move || self.write_ahead(&names))
                     .ok()
             });
-            self.prepare_with(steps, spread, move || {
+            self.prepare_with(steps, spread, late, move || {
                 ahead
                     .flatten()
                     .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
@@ -165,6 +170,7 @@ impl Bodies<'_> {
         &self,
         steps: Vec<StepOutput>,
         spread: bool,
+        late: &dyn Fn() -> bool,
         ahead: impl FnOnce() -> Vec<Option<super::Ahead>>,
     ) -> Prepared {
         use rayon::prelude::*;
@@ -186,7 +192,9 @@ impl Bodies<'_> {
                 )
             })
             .collect();
-        let mut recovered = model.contact_displacements(&states, spread).into_iter();
+        let mut recovered = model
+            .contact_displacements(&states, spread || late())
+            .into_iter();
         let fields: Vec<std::borrow::Cow<[f64]>> = steps
             .iter()
             .map(|s| match &s.u {
@@ -202,17 +210,23 @@ impl Bodies<'_> {
         }
         crate::trace::mark("fields recovered");
         // Without `spread` on this thread alone: the contact solve (or the other thread's
-        // preparation) has the other core.
-        let point_data: Vec<Vec<Field>> = if spread {
-            fields
-                .par_iter()
-                .map(|u| bodies_fields(model, u, true))
-                .collect()
-        } else {
-            fields
-                .iter()
-                .map(|u| bodies_fields(model, u, false))
-                .collect()
+        // preparation) has the other core, unless the run is over (at the end of Fig. 2 on
+        // L5 the writer still prepared three steps on its own when the driver, done with
+        // the last, had to wait for it: 40 ms).
+        // Two or more steps: their stresses in one pass over the elements per group of up to
+        // four (each element's gradients mapped once for the group: two steps in 7.5 ms on
+        // L5 where one by one took 12–14, on one thread or on two, `examples/ns_timing`), the
+        // groups on all threads with `spread`.
+        let us: Vec<&[f64]> = fields.iter().map(|u| &u[..]).collect();
+        let point_data: Vec<Vec<Field>> = match (us.len(), spread || late()) {
+            (1, spread) => vec![bodies_fields(model, us[0], spread)],
+            (n, true) => {
+                let groups = n.div_ceil(rayon::current_num_threads().max(1)).clamp(2, 4);
+                us.par_chunks(groups)
+                    .flat_map_iter(|g| bodies_fields_many(model, g))
+                    .collect()
+            }
+            (_, false) => bodies_fields_many(model, &us),
         };
         crate::trace::mark("point fields");
         let mesh = self.mesh.get_or_init(|| BodiesMesh::new(model));
@@ -231,7 +245,7 @@ impl Bodies<'_> {
                 .map_err(|source| write_error(&path, source))?;
             Ok((tmp, name))
         };
-        let bodies = if spread {
+        let bodies = if spread || late() {
             steps
                 .par_iter()
                 .zip(&point_data)
@@ -300,7 +314,7 @@ impl<'a> Series<'a> {
     /// contact solve's).
     pub fn write(&mut self, steps: Vec<StepOutput>) -> Result<(), RunError> {
         let spread = steps.iter().any(|s| s.reply.is_some());
-        let prepared = self.bodies.prepare(steps, spread);
+        let prepared = self.bodies.prepare(steps, spread, &|| false);
         self.commit(prepared)
     }
 
@@ -641,7 +655,7 @@ impl<'scope, 'env> Background<'scope, 'env> {
         let n = steps.len();
         let bodies = &self.bodies;
         let prepared = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            bodies.prepare(steps, spread)
+            bodies.prepare(steps, spread, &|| false)
         })) {
             Ok(p) => p,
             Err(panic) => {
@@ -738,7 +752,9 @@ fn writer_loop(shared: &Shared, series: &mut Series<'_>) -> Result<(), RunError>
                 shared.changed.notify_all();
                 drop(q);
                 let spread = batch.iter().any(|s| s.reply.is_some());
-                let prepared = series.bodies.prepare(batch, spread);
+                let prepared = series
+                    .bodies
+                    .prepare(batch, spread, &|| shared.lock().closed);
                 shared.lock().preparing = false;
                 prepared
             }

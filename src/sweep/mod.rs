@@ -329,6 +329,7 @@ pub fn sweep(
                 (row, t.elapsed().as_secs_f64(), res)
             })
             .collect();
+        crate::trace::mark("sweep: rows solved");
         if model.contact.is_some() {
             // The runs whose checks need a field: (index in `runs`, traction scale, state).
             let need: Vec<(usize, f64, &crate::contact::solver::State)> = runs
@@ -341,29 +342,67 @@ pub fn sweep(
                     _ => None,
                 })
                 .collect();
-            // One block solve per thread.
-            let per = need
-                .len()
-                .div_ceil(rayon::current_num_threads().max(1))
-                .max(1);
+            // One block solve, its columns split over the threads (a group of up to eight
+            // interleaved columns per thread, each group one read of the factor).
+            let states: Vec<_> = need.iter().map(|&(_, scale, st)| (scale, st)).collect();
             let fields: Vec<(usize, Vec<f64>)> = need
-                .par_chunks(per)
-                .flat_map_iter(|c| {
-                    let states: Vec<_> = c.iter().map(|&(_, scale, st)| (scale, st)).collect();
-                    c.iter()
-                        .map(|&(k, _, _)| k)
-                        .zip(model.contact_displacements(&states, true))
-                })
+                .iter()
+                .map(|&(k, _, _)| k)
+                .zip(model.contact_displacements(&states, true))
                 .collect();
             for (k, u) in fields {
                 if let Ok(sim) = &mut runs[k].2 {
                     sim.last_u = Some(u);
                 }
             }
+            crate::trace::mark("sweep: fields recovered");
         }
+        // The rows' equilibrium checks: eight fields per pass over the elements, a group of
+        // rows per thread (the same numbers as each row's own).
+        let inputs: Vec<(usize, crate::checks::Input)> = runs
+            .iter()
+            .enumerate()
+            .filter_map(|(k, (_, _, res))| match res {
+                Ok(sim) if sim.equilibrium.is_none() => sim.last_u.as_ref().map(|u| {
+                    let inp = crate::checks::Input {
+                        model,
+                        u,
+                        scale: sim.last_scale,
+                        state: sim.last_state.as_ref(),
+                        records: &sim.records,
+                        friction: None,
+                        equilibrium: None,
+                    };
+                    (k, inp)
+                }),
+                _ => None,
+            })
+            .collect();
+        let per = inputs
+            .len()
+            .div_ceil(rayon::current_num_threads().max(1))
+            .clamp(1, 8);
+        let checked: Vec<(usize, crate::checks::Check)> = inputs
+            .par_chunks(per)
+            .flat_map_iter(|group| {
+                let inps: Vec<_> = group.iter().map(|(_, inp)| inp.clone()).collect();
+                group
+                    .iter()
+                    .map(|(k, _)| *k)
+                    .zip(crate::checks::equilibrium_many(&inps))
+            })
+            .collect();
+        drop(inputs);
+        for (k, check) in checked {
+            if let Ok(sim) = &mut runs[k].2 {
+                sim.equilibrium = Some(check);
+            }
+        }
+        crate::trace::mark("sweep: rows' equilibrium");
         runs.into_par_iter()
             .map(|(row, wall_s, res)| row_of(model, laws, row, wall_s, res))
             .try_for_each(on_row)?;
+        crate::trace::mark("sweep: rows checked");
     }
     Ok(())
 }
