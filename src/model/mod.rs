@@ -117,7 +117,7 @@ pub struct Model {
     /// Where each element's twelve displacements are (see [`Model::element_u`]).
     elem_dofs: std::sync::OnceLock<Vec<[u32; 12]>>,
     /// Per element, what its internal forces read of its geometry, once
-    /// [`Model::keep_force_geometry`] has been called (a sweep does: its rows' checks).
+    /// [`Model::keep_force_geometry`] has been called (for timing: `examples/eq_timing`).
     force_geometry: std::sync::OnceLock<Vec<crate::elasticity::ForceGeometry>>,
 }
 
