@@ -16,33 +16,32 @@ fn main() {
         })
         .collect();
     let refs: Vec<&[f64]> = us.iter().map(|u| u.as_slice()).collect();
+    // A call's result and its wall time in ms.
+    fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
+        let t = Instant::now();
+        let r = f();
+        (r, t.elapsed().as_secs_f64() * 1e3)
+    }
     for _ in 0..4 {
         for k in [2usize, 4] {
-            let t = Instant::now();
-            let a: Vec<_> = refs[..k]
-                .iter()
-                .map(|u| model.nodal_stresses(u, false))
-                .collect();
-            let t1 = t.elapsed().as_secs_f64();
-            let t = Instant::now();
-            let p: Vec<_> = refs[..k]
-                .iter()
-                .map(|u| model.nodal_stresses(u, true))
-                .collect();
-            let t2 = t.elapsed().as_secs_f64();
-            let t = Instant::now();
-            let b = model.nodal_stresses_many(&refs[..k]);
-            let t3 = t.elapsed().as_secs_f64();
+            let one_by_one = |parallel| {
+                timed(|| {
+                    refs[..k]
+                        .iter()
+                        .map(|u| model.nodal_stresses(u, parallel))
+                        .collect::<Vec<_>>()
+                })
+            };
+            let (a, t1) = one_by_one(false);
+            let (p, t2) = one_by_one(true);
+            let (b, t3) = timed(|| model.nodal_stresses_many(&refs[..k]));
             let same = a.iter().zip(&b).all(|(x, y)| {
                 x.iter()
                     .zip(y)
                     .all(|(u, v)| u.iter().zip(v).all(|(p, q)| p.to_bits() == q.to_bits()))
             }) && a.iter().zip(&p).all(|(x, y)| x == y);
             println!(
-                "{k} fields: serial {:.1} ms, parallel {:.1} ms, lanes {:.1} ms, same {same}",
-                t1 * 1e3,
-                t2 * 1e3,
-                t3 * 1e3
+                "{k} fields: serial {t1:.1} ms, parallel {t2:.1} ms, lanes {t3:.1} ms, same {same}"
             );
         }
     }

@@ -287,6 +287,21 @@ pub fn element_forces_with(
     (f, geo.kmax)
 }
 
+/// [`strain_of`] of `R` displacement sets at once (lane by lane, the same operations).
+#[inline(always)]
+fn strain_lanes<const R: usize>(dndx: &[[f64; 2]; 6], ue: &[[f64; R]; 12]) -> [[f64; R]; 3] {
+    let mut e = [[0.0; R]; 3];
+    for a in 0..6 {
+        let (gx, gy) = (dndx[a][0], dndx[a][1]);
+        for j in 0..R {
+            e[0][j] += gx * ue[2 * a][j];
+            e[1][j] += gy * ue[2 * a + 1][j];
+            e[2][j] += gy * ue[2 * a][j] + gx * ue[2 * a + 1][j];
+        }
+    }
+    e
+}
+
 /// [`element_forces_with`] of `R` displacement sets at once (entry `[k][j]`: DOF `k` of set
 /// `j`): the geometry read once for all of them, each lane the same operations in the same
 /// order as the one-set function, so the same bits.
@@ -300,16 +315,7 @@ pub fn element_forces_lanes<const R: usize>(
     let mixed = geo.mean_divergence.is_some();
     let mut f = [[0.0; R]; 12];
     for (s, dndx) in geo.s.iter().zip(&geo.dndx) {
-        // `strain_of`, lane by lane.
-        let mut e = [[0.0; R]; 3];
-        for a in 0..6 {
-            let (gx, gy) = (dndx[a][0], dndx[a][1]);
-            for j in 0..R {
-                e[0][j] += gx * ue[2 * a][j];
-                e[1][j] += gy * ue[2 * a + 1][j];
-                e[2][j] += gy * ue[2 * a][j] + gx * ue[2 * a + 1][j];
-            }
-        }
+        let e = strain_lanes(dndx, ue);
         // `Material::stress`, or the B part of a mixed element.
         let mut sig = [[0.0; R]; 3];
         for j in 0..R {
@@ -440,15 +446,7 @@ pub fn nodal_stress_lanes<const R: usize>(
     let g: [[[f64; R]; 4]; 3] = std::array::from_fn(|q| {
         let (_, dndx) = tri6::gradients(xe, &d3[q]);
         // `strain_of`, then `Material::stress4`, lane by lane.
-        let mut e = [[0.0; R]; 3];
-        for a in 0..6 {
-            let (gx, gy) = (dndx[a][0], dndx[a][1]);
-            for j in 0..R {
-                e[0][j] += gx * ue[2 * a][j];
-                e[1][j] += gy * ue[2 * a + 1][j];
-                e[2][j] += gy * ue[2 * a][j] + gx * ue[2 * a + 1][j];
-            }
-        }
+        let e = strain_lanes(&dndx, ue);
         let mut s = [[0.0; R]; 4];
         for j in 0..R {
             if mixed {

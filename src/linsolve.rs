@@ -1016,6 +1016,43 @@ fn prefetch(v: &[f64]) {
     let _ = v;
 }
 
+/// The downward prefetch of the backward sweeps (see [`sweep_leading_body`]): the values of the
+/// supernodes solved next, requested up to 8 KB below the one being solved.
+struct Ahead {
+    /// The first supernode requested so far.
+    next: usize,
+    /// Bytes requested below the supernode being solved.
+    fetched: usize,
+}
+
+impl Ahead {
+    const BYTES: usize = 8 << 10;
+
+    fn new(nsup: usize) -> Ahead {
+        Ahead {
+            next: nsup,
+            fetched: 0,
+        }
+    }
+
+    /// Supernode `i` (of `nodes`, going down) is solved next: requests what follows it.
+    #[inline(always)]
+    fn at(&mut self, nodes: &[(usize, usize, usize, Node<'_>)], i: usize) {
+        let bytes = |(_, wk, _, node): &(usize, usize, usize, Node<'_>)| wk * node.nrows * 8;
+        if self.next > i {
+            (self.next, self.fetched) = (i, 0);
+        } else {
+            self.fetched -= bytes(&nodes[i]);
+        }
+        while self.next > 0 && self.fetched < Self::BYTES {
+            self.next -= 1;
+            let (_, wk, _, next) = &nodes[self.next];
+            prefetch(&next.val[..wk * next.nrows]);
+            self.fetched += bytes(&nodes[self.next]);
+        }
+    }
+}
+
 /// The forward, diagonal and backward sweeps of `K̂ X = B` with the leading block of a saddle
 /// factor (`nodes`: per supernode of K its first column, its columns of K, the pattern rows of
 /// K and its values), in place on the permuted columns `x` of length `size` each.
@@ -1082,32 +1119,20 @@ fn sweep_leading_body(nodes: &[(usize, usize, usize, Node<'_>)], x: &mut [f64], 
     // The values of the supernodes solved next are requested 8 KB ahead: the sweep goes down
     // the factor's memory, a few KB per supernode, and the hardware's prefetch does not follow
     // it from one supernode to the one before (without: 17.4 ms for this loop on L5, with:
-    // 11.6 ms). The supernodes from `ahead` up are requested, `fetched` bytes of them below
-    // the one being solved. Within a supernode the sums over its pattern rows (most of its
+    // 11.6 ms; [`Ahead`]). Within a supernode the sums over its pattern rows (most of its
     // values) are formed first, column after column in memory order, and the dependent
     // diagonal-block sums after: one column's recovery 17.4 → 15.2 ms on L5 with the
     // downward prefetch (`examples/recovery_timing`, five alternating runs each). The same
     // operations on each entry, so the same bits.
-    const PREFETCH_BYTES: usize = 8 << 10;
-    let (mut ahead, mut fetched) = (nodes.len(), 0usize);
+    let mut ahead = Ahead::new(nodes.len());
     let mut below = Vec::new();
     for (i, (start, wk, kp, node)) in nodes.iter().enumerate().rev() {
         let (pat, w) = (&node.pattern[..*kp], node.ncols);
-        let bytes = |(_, wk, _, node): &(usize, usize, usize, Node<'_>)| wk * node.nrows * 8;
-        if ahead > i {
-            (ahead, fetched) = (i, 0);
-        } else {
-            fetched -= bytes(&nodes[i]);
-        }
-        while ahead > 0 && fetched < PREFETCH_BYTES {
-            ahead -= 1;
-            let (_, wk, _, next) = &nodes[ahead];
-            prefetch(&next.val[..wk * next.nrows]);
-            fetched += bytes(&nodes[ahead]);
-        }
+        ahead.at(nodes, i);
         for x in x.chunks_exact_mut(size) {
-            // Plain loops, not `extend` over a `map`: a closure's loop can be compiled
-            // outside this function, without its AVX2 (the same bits, half the speed).
+            // Plain loops, not `extend` over a `map`: the closure's loop was compiled outside
+            // this function, without its AVX2 (perf annotate of `examples/recovery_timing`;
+            // the same bits either way).
             t.clear();
             for &row in pat {
                 t.push(x[row]);
@@ -1219,24 +1244,12 @@ fn sweep_leading_lanes_body<const R: usize>(
         }
     }
     // D and backward, with the prefetch of `sweep_leading_body`.
-    const PREFETCH_BYTES: usize = 8 << 10;
-    let (mut ahead, mut fetched) = (nodes.len(), 0usize);
+    let mut ahead = Ahead::new(nodes.len());
     let mut below: Vec<[f64; R]> = Vec::new();
     for (i, (start, wk, kp, node)) in nodes.iter().enumerate().rev() {
         let (start, wk, kp) = (*start, *wk, *kp);
         let (pat, w) = (&node.pattern[..kp], node.ncols);
-        let bytes = |(_, wk, _, node): &(usize, usize, usize, Node<'_>)| wk * node.nrows * 8;
-        if ahead > i {
-            (ahead, fetched) = (i, 0);
-        } else {
-            fetched -= bytes(&nodes[i]);
-        }
-        while ahead > 0 && fetched < PREFETCH_BYTES {
-            ahead -= 1;
-            let (_, wk, _, next) = &nodes[ahead];
-            prefetch(&next.val[..wk * next.nrows]);
-            fetched += bytes(&nodes[ahead]);
-        }
+        ahead.at(nodes, i);
         t.clear();
         for &row in pat {
             t.push(x[row]);
@@ -1931,30 +1944,13 @@ mod tests {
     }
 
     /// Columns swept together, interleaved (two, four or eight at a time, with a lane left
-    /// over), give each the bits of its own sweep, on either instruction set: among them a
+    /// over), give each the bits of its own sweep on a grid's saddle factor, on either
+    /// instruction set: among them a
     /// zero column, a column of negative zeros (whose entries the forward sweep must leave as
     /// they are, as the one-column sweep skips them) and columns zero in most supernodes.
     #[test]
     fn interleaved_columns_give_the_bits_of_one_column_at_a_time() {
-        let side = 20;
-        let n = side * side;
-        let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
-        for j in 0..n {
-            let (r, c) = (j / side, j % side);
-            if r > 0 {
-                row_idx.push(j - side);
-                values.push(-1.0 - 0.02 * (j % 5) as f64);
-            }
-            if c > 0 {
-                row_idx.push(j - 1);
-                values.push(-1.0 - 0.01 * (j % 7) as f64);
-            }
-            row_idx.push(j);
-            values.push(4.6);
-            col_ptr.push(row_idx.len());
-        }
-        let y = vec![vec![(3, 1.0), (40, -1.0)], vec![(n - 1, 1.0)]];
-        let sym = SaddleSymbolic::analyse(n, &col_ptr, &row_idx, &y).unwrap();
+        let (n, _, _, values, y, sym) = grid_saddle();
         let f = sym.factorise(&values, &y).unwrap();
         let size = n + y.len();
         let vals = f.values();
