@@ -3,8 +3,9 @@
 # alternating runs so that the machine's drift falls on both alike; prints the median and the
 # minimum process wall time of each and the median of the per-pair ratios B/A, then each side's
 # wall time against its own floor (`timings_s.build_span` of the run's summary.json: the
-# assembly, analysis and factorisation as they ran) and what the run spent beyond it, and each
-# side's numeric factorisation times (`timings_s.factorise`), sorted.
+# assembly, analysis and factorisation as they ran) and what the run spent beyond it, the
+# difference of the latter pair by pair (its median, and a sign test of how often B is lower),
+# and each side's numeric factorisation times (`timings_s.factorise`), sorted.
 #
 #   benches/ab.sh N BIN_A BIN_B [CASE] [cold|warm] [ENV_A] [ENV_B]
 #
@@ -68,6 +69,17 @@ if all(x[1] > 0 and y[1] > 0 for x, y in r):
         print("%s: wall / floor median %.3f (%s), wall - floor median %.3f s"
               % (side, st.median([w / f for w, f, _ in v]), " ".join("%.2f" % (w / f) for w, f, _ in v),
                  st.median([w - f for w, f, _ in v])))
+    # The work after the floor, pair by pair (the runs of a pair are next to each other, so
+    # the drift of the machine falls on both): the median difference, and in how many pairs
+    # that of B is the smaller, with the p of a two-sided sign test (how often a fair coin
+    # splits the pairs at least that unevenly: below 0.05 the difference is unlikely to be
+    # the noise).
+    d = [(y[0] - y[1]) - (x[0] - x[1]) for x, y in r]
+    n, k = len(d), sum(1 for v in d if v < 0)
+    import math
+    tail = sum(math.comb(n, i) for i in range(0, min(k, n - k) + 1)) / 2 ** n
+    print("B - A, wall - floor: median of pairs %+.1f ms; B lower in %d of %d pairs (sign test p = %.3f)"
+          % (1e3 * st.median(d), k, n, min(1.0, 2 * tail)))
     # The numeric factorisation of each run, sorted (its slow outliers move the floor).
     for side, k in (("A", 0), ("B", 1)):
         print("%s: factorise s, sorted: %s" % (side, " ".join("%.2f" % p[k][2] for p in sorted(r, key=lambda p: p[k][2]))))'
