@@ -136,7 +136,6 @@ pub fn hertz_a(load: f64, radius: f64, e_star: f64) -> f64 {
 }
 
 /// What the checks read from a finished run.
-#[derive(Clone)]
 pub struct Input<'a> {
     pub model: &'a Model,
     /// The free solution of the last converged step and its traction scale.
@@ -188,11 +187,8 @@ pub fn equilibrium_many(inps: &[Input]) -> Vec<Check> {
 fn equilibrium_lanes<const R: usize>(inps: &[Input]) -> Vec<Check> {
     let model = inps[0].model;
     let n_free = model.dofs.n_free();
-    let mut uu: Vec<[f64; R]> = Vec::with_capacity(n_free + model.dofs.prescribed.len());
-    for d in 0..n_free {
-        uu.push(std::array::from_fn(|j| inps.get(j).map_or(0.0, |i| i.u[d])));
-    }
-    uu.extend(model.dofs.prescribed.iter().map(|&p| [p; R]));
+    let us: Vec<&[f64]> = inps.iter().map(|i| i.u).collect();
+    let uu = model.interleave::<R>(&us);
     // Residual at free DOFs: f_int − loads − contact and pilot forces; each element's nodal
     // forces added in the order of the elements, with the size of the terms summed.
     let mut res: Vec<[f64; R]> = model

@@ -250,7 +250,8 @@ pub fn element_forces(xe: &[[f64; 2]; 6], ue: &[f64; 12], mat: &Material) -> ([f
     element_forces_with(&force_geometry(xe, mat), ue, mat)
 }
 
-/// [`element_forces`] from the element's [`ForceGeometry`] (the same arithmetic).
+/// [`element_forces`] from the element's [`ForceGeometry`] (the same arithmetic):
+/// [`element_forces_lanes`] of one set.
 pub fn element_forces_with(
     geo: &ForceGeometry,
     ue: &[f64; 12],
@@ -261,30 +262,8 @@ pub fn element_forces_with(
         mat.is_mixed(),
         "the geometry of another material"
     );
-    let (l, m) = mat.lame();
-    let mut f = [0.0; 12];
-    for (s, dndx) in geo.s.iter().zip(&geo.dndx) {
-        let e = strain_of(dndx, ue);
-        // The stress of the B part: σ = D ε, or μ D₀ ε for a mixed element (its λ part below).
-        let sig = if geo.mean_divergence.is_some() {
-            [2.0 * m * e[0], 2.0 * m * e[1], m * e[2]]
-        } else {
-            mat.stress(e)
-        };
-        for (a, g) in dndx.iter().enumerate() {
-            let (ax, ay) = (g[0], g[1]);
-            f[2 * a] += s * (ax * sig[0] + ay * sig[2]);
-            f[2 * a + 1] += s * (ay * sig[1] + ax * sig[2]);
-        }
-    }
-    if let Some(md) = &geo.mean_divergence {
-        let (bbar, area) = (&md.0, md.1);
-        let theta: f64 = bbar.iter().zip(ue).map(|(b, u)| b * u).sum();
-        for i in 0..12 {
-            f[i] += l * area * bbar[i] * theta;
-        }
-    }
-    (f, geo.kmax)
+    let f = element_forces_lanes(geo, &ue.map(|v| [v]), mat);
+    (f.map(|[v]| v), geo.kmax)
 }
 
 /// [`strain_of`] of `R` displacement sets at once (lane by lane, the same operations).
@@ -393,34 +372,14 @@ pub fn stress_point_gradients() -> [[[f64; 2]; 6]; 3] {
 }
 
 /// [`nodal_stress`] with the reference derivatives `d3` of [`stress_point_gradients`]
-/// evaluated once for a loop over elements (the same bits).
+/// evaluated once for a loop over elements (the same bits): [`nodal_stress_lanes`] of one set.
 pub fn nodal_stress_at(
     xe: &[[f64; 2]; 6],
     ue: &[f64; 12],
     mat: &Material,
     d3: &[[[f64; 2]; 6]; 3],
 ) -> [[f64; 4]; 6] {
-    let theta = element_theta(xe, ue, mat);
-    let g: [[f64; 4]; 3] = std::array::from_fn(|q| {
-        let (_, dndx) = tri6::gradients(xe, &d3[q]);
-        mat.stress4(strain_of(&dndx, ue), theta)
-    });
-    let mut out = [[0.0; 4]; 6];
-    for (a, r) in tri6::NODE_REF_COORDS.iter().enumerate() {
-        // Local coordinates in the triangle of the quadrature points.
-        let s = (r[0] - 1.0 / 6.0) * 2.0;
-        let t = (r[1] - 1.0 / 6.0) * 2.0;
-        let c = [1.0 - s - t, s, t];
-        for i in 0..3 {
-            out[a][i] = c[0] * g[0][i] + c[1] * g[1][i] + c[2] * g[2][i];
-        }
-        out[a][3] = if mat.is_mixed() {
-            g[0][3]
-        } else {
-            mat.sigma_zz([out[a][0], out[a][1], out[a][2]])
-        };
-    }
-    out
+    nodal_stress_lanes(xe, &ue.map(|v| [v]), mat, d3).map(|a| a.map(|[v]| v))
 }
 
 /// [`nodal_stress_at`] of `R` displacement sets at once (`ue[k][j]`: DOF `k` of set `j`;
@@ -465,6 +424,7 @@ pub fn nodal_stress_lanes<const R: usize>(
     });
     let mut out = [[[0.0; R]; 4]; 6];
     for (a, r) in tri6::NODE_REF_COORDS.iter().enumerate() {
+        // Local coordinates in the triangle of the quadrature points.
         let s = (r[0] - 1.0 / 6.0) * 2.0;
         let t = (r[1] - 1.0 / 6.0) * 2.0;
         let c = [1.0 - s - t, s, t];
@@ -558,8 +518,61 @@ mod tests {
         }
     }
 
-    /// Element forces and nodal stresses of several displacement sets at once (lanes) are
-    /// each set's own, bit for bit, for either kind of element; a zero set gives zeros.
+    /// One set's element forces and nodal stresses written out plainly (the arithmetic the
+    /// lanes must repeat, operation for operation): the oracle of the test below.
+    fn forces_one_set(geo: &ForceGeometry, ue: &[f64; 12], mat: &Material) -> [f64; 12] {
+        let (l, m) = mat.lame();
+        let mut f = [0.0; 12];
+        for (s, dndx) in geo.s.iter().zip(&geo.dndx) {
+            let e = strain_of(dndx, ue);
+            let sig = if geo.mean_divergence.is_some() {
+                [2.0 * m * e[0], 2.0 * m * e[1], m * e[2]]
+            } else {
+                mat.stress(e)
+            };
+            for (a, g) in dndx.iter().enumerate() {
+                let (ax, ay) = (g[0], g[1]);
+                f[2 * a] += s * (ax * sig[0] + ay * sig[2]);
+                f[2 * a + 1] += s * (ay * sig[1] + ax * sig[2]);
+            }
+        }
+        if let Some(md) = &geo.mean_divergence {
+            let (bbar, area) = (&md.0, md.1);
+            let theta: f64 = bbar.iter().zip(ue).map(|(b, u)| b * u).sum();
+            for i in 0..12 {
+                f[i] += l * area * bbar[i] * theta;
+            }
+        }
+        f
+    }
+
+    fn stress_one_set(xe: &[[f64; 2]; 6], ue: &[f64; 12], mat: &Material) -> [[f64; 4]; 6] {
+        let theta = element_theta(xe, ue, mat);
+        let d3 = stress_point_gradients();
+        let g: [[f64; 4]; 3] = std::array::from_fn(|q| {
+            let (_, dndx) = tri6::gradients(xe, &d3[q]);
+            mat.stress4(strain_of(&dndx, ue), theta)
+        });
+        let mut out = [[0.0; 4]; 6];
+        for (a, r) in tri6::NODE_REF_COORDS.iter().enumerate() {
+            let s = (r[0] - 1.0 / 6.0) * 2.0;
+            let t = (r[1] - 1.0 / 6.0) * 2.0;
+            let c = [1.0 - s - t, s, t];
+            for i in 0..3 {
+                out[a][i] = c[0] * g[0][i] + c[1] * g[1][i] + c[2] * g[2][i];
+            }
+            out[a][3] = if mat.is_mixed() {
+                g[0][3]
+            } else {
+                mat.sigma_zz([out[a][0], out[a][1], out[a][2]])
+            };
+        }
+        out
+    }
+
+    /// Element forces and nodal stresses of several displacement sets at once (lanes; one
+    /// set is the library's one-set path) are each set's own as written out plainly above,
+    /// bit for bit, for either kind of element; a zero set gives zeros.
     #[test]
     fn lanes_give_the_bits_of_one_set_at_a_time() {
         fn check<const R: usize>(xe: &[[f64; 2]; 6], mat: &Material) {
@@ -578,8 +591,7 @@ mod tests {
             let d3 = stress_point_gradients();
             let sl = nodal_stress_lanes(xe, &ue, mat, &d3);
             for (j, set) in sets.iter().enumerate() {
-                let (f, kmax) = element_forces(xe, set, mat);
-                assert_eq!(kmax.to_bits(), geo.kmax().to_bits());
+                let f = forces_one_set(&geo, set, mat);
                 for k in 0..12 {
                     assert_eq!(
                         f[k].to_bits(),
@@ -587,7 +599,7 @@ mod tests {
                         "force {k} of set {j} of {R}"
                     );
                 }
-                let s = nodal_stress_at(xe, set, mat, &d3);
+                let s = stress_one_set(xe, set, mat);
                 for a in 0..6 {
                     for i in 0..4 {
                         assert_eq!(

@@ -97,6 +97,28 @@ pub fn vec_in_parallel(n: usize) -> Vec<f64> {
     v
 }
 
+/// Copies the part of a supernode (first column `start`, `ncols` columns, off-diagonal rows
+/// `pattern`, entry `(i, j)` of its columns by `at`) at and after row and column `from` into
+/// the dense lower triangle `out` of the trailing block (`out[(r − from, c − from)]`).
+fn copy_trailing(
+    out: &mut faer::Mat<f64>,
+    from: usize,
+    start: usize,
+    ncols: usize,
+    pattern: &[usize],
+    at: impl Fn(usize, usize) -> f64,
+) {
+    for j in start.max(from) - start..ncols {
+        let col = start + j - from;
+        for i in j..ncols {
+            out[(start + i - from, col)] = at(i, j);
+        }
+        for (k, &row) in pattern.iter().enumerate() {
+            out[(row - from, col)] = at(ncols + k, j);
+        }
+    }
+}
+
 /// Element access to a matrix from several rayon tasks at once, for loops whose tasks touch
 /// disjoint elements (each use states why).
 struct SharedMat {
@@ -363,23 +385,15 @@ impl PartialSymbolic {
             let lref = SupernodalLltRef::new(sn, &l);
             for s in 0..sn.n_supernodes() {
                 let node = lref.supernode(s);
-                let (start, val, pattern) = (node.start(), node.val(), node.pattern());
-                let ncols = val.ncols();
-                if start + ncols <= n_i {
-                    continue;
-                }
-                for j in 0..ncols {
-                    let col = start + j;
-                    if col < n_i {
-                        continue;
-                    }
-                    for i in j..ncols {
-                        l_rr[(start + i - n_i, col - n_i)] = val[(i, j)];
-                    }
-                    for (k, &row) in pattern.iter().enumerate() {
-                        l_rr[(row - n_i, col - n_i)] = val[(ncols + k, j)];
-                    }
-                }
+                let val = node.val();
+                copy_trailing(
+                    &mut l_rr,
+                    n_i,
+                    node.start(),
+                    val.ncols(),
+                    node.pattern(),
+                    |i, j| val[(i, j)],
+                );
             }
         }
         Ok(PartialCholesky {
@@ -1530,22 +1544,9 @@ impl SaddleFactor {
         let mut l = zeros_in_parallel(m, m);
         for s in 0..self.layout.n_supernodes() {
             let node = self.layout.node(s, &values);
-            let (start, pattern, ncols) = (node.start, node.pattern, node.ncols);
-            if start + ncols <= n {
-                continue;
-            }
-            for j in 0..ncols {
-                let col = start + j;
-                if col < n {
-                    continue;
-                }
-                for i in j..ncols {
-                    l[(start + i - n, col - n)] = node.at(i, j);
-                }
-                for (k, &row) in pattern.iter().enumerate() {
-                    l[(row - n, col - n)] = node.at(ncols + k, j);
-                }
-            }
+            copy_trailing(&mut l, n, node.start, node.ncols, node.pattern, |i, j| {
+                node.at(i, j)
+            });
         }
         l
     }

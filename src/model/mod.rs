@@ -117,7 +117,7 @@ pub struct Model {
     /// Where each element's twelve displacements are (see [`Model::element_u`]).
     elem_dofs: std::sync::OnceLock<Vec<[u32; 12]>>,
     /// Per element, what its internal forces read of its geometry, once
-    /// [`Model::keep_force_geometry`] has been called (for timing: `examples/eq_timing`).
+    /// [`Model::keep_force_geometry`] has been called (for timing: `examples/stress_timing`).
     force_geometry: std::sync::OnceLock<Vec<crate::elasticity::ForceGeometry>>,
 }
 
@@ -508,6 +508,28 @@ impl Model {
         })
     }
 
+    /// The fields `us` (of the free DOFs) interleaved for the loops that run across several
+    /// fields at once: `[d][j]` is field `j` at the DOF `d` of [`Model::element_dof_table`]
+    /// (the free DOFs, then the prescribed values), one cache line per DOF for all of them;
+    /// the lanes past `us` are zero.
+    pub fn interleave<const R: usize>(&self, us: &[&[f64]]) -> Vec<[f64; R]> {
+        let n_free = self.dofs.n_free();
+        let mut uu: Vec<[f64; R]> = Vec::with_capacity(n_free + self.dofs.prescribed.len());
+        for d in 0..n_free {
+            uu.push(std::array::from_fn(|j| us.get(j).map_or(0.0, |u| u[d])));
+        }
+        uu.extend(self.dofs.prescribed.iter().map(|&p| [p; R]));
+        uu
+    }
+
+    /// [`Model::element_u`] of interleaved fields ([`Model::interleave`]) for an element's
+    /// row `dofs` of [`Model::element_dof_table`] (taken once by the caller's loop: asked for
+    /// per element it cost the loop a sixth): `[k][j]` is DOF `k` of field `j`.
+    #[inline(always)]
+    pub fn element_u_lanes<const R: usize>(dofs: &[u32; 12], uu: &[[f64; R]]) -> [[f64; R]; 12] {
+        std::array::from_fn(|k| uu.get(dofs[k] as usize).copied().unwrap_or([0.0; R]))
+    }
+
     /// Where each DOF of each element is (of `self.elems`): its index among the free DOFs
     /// (below [`DofMap::n_free`]), `n_free` plus its index among the prescribed ones, or
     /// `u32::MAX` for none.
@@ -573,20 +595,12 @@ impl Model {
     #[inline(always)]
     fn nodal_stresses_lanes_body<const R: usize>(&self, us: &[&[f64]]) -> Vec<Vec<[f64; 4]>> {
         let d3 = elasticity::stress_point_gradients();
-        let n_free = self.dofs.n_free();
-        // The fields interleaved (one cache line per DOF for all of them), then the
-        // prescribed values, as `element_u` reads them.
-        let mut uu: Vec<[f64; R]> = Vec::with_capacity(n_free + self.dofs.prescribed.len());
-        for d in 0..n_free {
-            uu.push(std::array::from_fn(|j| us.get(j).map_or(0.0, |u| u[d])));
-        }
-        uu.extend(self.dofs.prescribed.iter().map(|&p| [p; R]));
+        let uu = self.interleave::<R>(us);
         let table = self.element_dof_table();
         let mut acc = vec![[[0.0; R]; 4]; self.mesh.nodes.len()];
         let mut count = vec![0u32; self.mesh.nodes.len()];
         for (i, (e, mat)) in self.elems.iter().enumerate() {
-            let ue: [[f64; R]; 12] =
-                std::array::from_fn(|k| uu.get(table[i][k] as usize).copied().unwrap_or([0.0; R]));
+            let ue = Model::element_u_lanes(&table[i], &uu);
             let s = elasticity::nodal_stress_lanes(&self.mesh.tri_coords(*e), &ue, mat, &d3);
             for (a, &n) in self.mesh.triangles[*e].nodes.iter().enumerate() {
                 for c in 0..4 {

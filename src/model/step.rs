@@ -102,9 +102,7 @@ impl Model {
     /// the same numbers as one field at a time), element by element in the order of
     /// `self.elems` on the calling thread, each handed to `each(i, ue, fe, kmax)` with the
     /// element's displacements and forces (`[k][j]`: DOF `k` of field `j`) and the largest
-    /// entry of its stiffness. `uu[d][j]`: the value of field `j` at the DOF `d` of
-    /// [`Model::element_dof_table`] (the free DOFs, then the prescribed ones): one cache line
-    /// per DOF for all the fields.
+    /// entry of its stiffness. `uu`: the fields as [`Model::interleave`] gives them.
     pub fn each_element_forces<const R: usize>(
         &self,
         uu: &[[f64; R]],
@@ -139,9 +137,7 @@ impl Model {
         let kept = self.force_geometry.get();
         let table = self.element_dof_table();
         for (i, (e, mat)) in self.elems.iter().enumerate() {
-            // `element_u`, lane by lane: a DOF of no value is zero.
-            let ue: [[f64; R]; 12] =
-                std::array::from_fn(|k| uu.get(table[i][k] as usize).copied().unwrap_or([0.0; R]));
+            let ue = Model::element_u_lanes(&table[i], uu);
             let computed;
             let geo = match kept {
                 Some(g) => &g[i],

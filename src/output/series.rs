@@ -109,18 +109,15 @@ impl Prepared {
 }
 
 impl Bodies<'_> {
-    /// The fields of `steps` (recovered from their contact states in one block solve, on all
-    /// threads with `spread`, else in one sweep on this thread), sent to the steps that asked
-    /// for them, and their bodies datasets written side by side to their temporary names.
+    /// The fields of `steps` (recovered from their contact states in one sweep of the factor
+    /// on this thread, their columns interleaved), sent to the steps that asked for them, and
+    /// their bodies datasets written side by side to their temporary names: with `spread`
+    /// their stresses and files on all threads, else on this one.
     ///
     /// The bytes of the datasets that do not depend on the step (after the point fields) are
     /// written meanwhile on a thread of its own ([`super::Ahead`]), where the file system
     /// allows it; the rest of each file follows once its fields are known. The same bytes.
-    ///
-    /// `late`: whether the other threads have nothing left to do but wait (the driver's run is
-    /// over), asked before each stage: from then on the stage runs on all threads, as with
-    /// `spread` (the same bytes).
-    fn prepare(&self, steps: Vec<StepOutput>, spread: bool, late: &dyn Fn() -> bool) -> Prepared {
+    fn prepare(&self, steps: Vec<StepOutput>, spread: bool) -> Prepared {
         std::thread::scope(|scope| {
             let ahead = (!self.compress).then(|| {
                 let names: Vec<PathBuf> = steps
@@ -132,7 +129,7 @@ impl Bodies<'_> {
                     .spawn_scoped(scope, move || self.write_ahead(&names))
                     .ok()
             });
-            self.prepare_with(steps, spread, late, move || {
+            self.prepare_with(steps, spread, move || {
                 ahead
                     .flatten()
                     .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
@@ -170,7 +167,6 @@ impl Bodies<'_> {
         &self,
         steps: Vec<StepOutput>,
         spread: bool,
-        late: &dyn Fn() -> bool,
         ahead: impl FnOnce() -> Vec<Option<super::Ahead>>,
     ) -> Prepared {
         use rayon::prelude::*;
@@ -192,9 +188,9 @@ impl Bodies<'_> {
                 )
             })
             .collect();
-        let mut recovered = model
-            .contact_displacements(&states, spread || late())
-            .into_iter();
+        // A batch (at most `BATCH` steps) is one group of interleaved columns, which
+        // `contact_displacements` solves on this thread with or without `spread`.
+        let mut recovered = model.contact_displacements(&states, false).into_iter();
         let fields: Vec<std::borrow::Cow<[f64]>> = steps
             .iter()
             .map(|s| match &s.u {
@@ -210,15 +206,13 @@ impl Bodies<'_> {
         }
         crate::trace::mark("fields recovered");
         // Without `spread` on this thread alone: the contact solve (or the other thread's
-        // preparation) has the other core, unless the run is over (at the end of Fig. 2 on
-        // L5 the writer still prepared three steps on its own when the driver, done with
-        // the last, had to wait for it: 40 ms).
+        // preparation) has the other core.
         // Two or more steps: their stresses in one pass over the elements per group of up to
-        // four (each element's gradients mapped once for the group: two steps in 7.5 ms on
-        // L5 where one by one took 12–14, on one thread or on two, `examples/ns_timing`), the
-        // groups on all threads with `spread`.
+        // four (each element's gradients mapped once for the group: two steps in 8–12 ms on
+        // L5 where one by one took 13–19, on one thread or on two, `examples/stress_timing`),
+        // the groups on all threads with `spread`.
         let us: Vec<&[f64]> = fields.iter().map(|u| &u[..]).collect();
-        let point_data: Vec<Vec<Field>> = match (us.len(), spread || late()) {
+        let point_data: Vec<Vec<Field>> = match (us.len(), spread) {
             (1, spread) => vec![bodies_fields(model, us[0], spread)],
             (n, true) => {
                 let groups = n.div_ceil(rayon::current_num_threads().max(1)).clamp(2, 4);
@@ -245,7 +239,7 @@ impl Bodies<'_> {
                 .map_err(|source| write_error(&path, source))?;
             Ok((tmp, name))
         };
-        let bodies = if spread || late() {
+        let bodies = if spread {
             steps
                 .par_iter()
                 .zip(&point_data)
@@ -310,11 +304,11 @@ impl<'a> Series<'a> {
     /// fields from the free solution or, with contact, recovered from the contact state), its
     /// contact dataset and CSV, the rewritten `.pvd`, then its restart state if it has one.
     /// A batch with a step whose field is asked for (the last, which the driver waits for)
-    /// is recovered on all threads, else in one sweep on this one (the other core is the
-    /// contact solve's).
+    /// has its stresses and files prepared on all threads, else on this one (the other core
+    /// is the contact solve's).
     pub fn write(&mut self, steps: Vec<StepOutput>) -> Result<(), RunError> {
         let spread = steps.iter().any(|s| s.reply.is_some());
-        let prepared = self.bodies.prepare(steps, spread, &|| false);
+        let prepared = self.bodies.prepare(steps, spread);
         self.commit(prepared)
     }
 
@@ -655,7 +649,7 @@ impl<'scope, 'env> Background<'scope, 'env> {
         let n = steps.len();
         let bodies = &self.bodies;
         let prepared = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            bodies.prepare(steps, spread, &|| false)
+            bodies.prepare(steps, spread)
         })) {
             Ok(p) => p,
             Err(panic) => {
@@ -752,9 +746,7 @@ fn writer_loop(shared: &Shared, series: &mut Series<'_>) -> Result<(), RunError>
                 shared.changed.notify_all();
                 drop(q);
                 let spread = batch.iter().any(|s| s.reply.is_some());
-                let prepared = series
-                    .bodies
-                    .prepare(batch, spread, &|| shared.lock().closed);
+                let prepared = series.bodies.prepare(batch, spread);
                 shared.lock().preparing = false;
                 prepared
             }

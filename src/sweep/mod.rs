@@ -360,7 +360,7 @@ pub fn sweep(
         }
         // The rows' equilibrium checks: eight fields per pass over the elements, a group of
         // rows per thread (the same numbers as each row's own).
-        let inputs: Vec<(usize, crate::checks::Input)> = runs
+        let (ks, inputs): (Vec<usize>, Vec<crate::checks::Input>) = runs
             .iter()
             .enumerate()
             .filter_map(|(k, (_, _, res))| match res {
@@ -378,23 +378,17 @@ pub fn sweep(
                 }),
                 _ => None,
             })
-            .collect();
+            .unzip();
         let per = inputs
             .len()
             .div_ceil(rayon::current_num_threads().max(1))
             .clamp(1, 8);
-        let checked: Vec<(usize, crate::checks::Check)> = inputs
+        let checked: Vec<crate::checks::Check> = inputs
             .par_chunks(per)
-            .flat_map_iter(|group| {
-                let inps: Vec<_> = group.iter().map(|(_, inp)| inp.clone()).collect();
-                group
-                    .iter()
-                    .map(|(k, _)| *k)
-                    .zip(crate::checks::equilibrium_many(&inps))
-            })
+            .flat_map_iter(crate::checks::equilibrium_many)
             .collect();
         drop(inputs);
-        for (k, check) in checked {
+        for (k, check) in ks.into_iter().zip(checked) {
             if let Ok(sim) = &mut runs[k].2 {
                 sim.equilibrium = Some(check);
             }
