@@ -186,11 +186,15 @@ impl ContactSystem {
         let (w0, prev, mu, eps) = (it.w0, it.prev, it.mu, it.eps);
         let mut slip = vec![SlipLin::default(); ns];
         if let Some(law) = it.law {
-            for j in (0..ns).filter(|&j| it.status[j] == Status::Slip) {
-                let y_j = match it.y {
-                    Some(y) => y[ns + j],
-                    None => self.y_at(w0, mu, ns + j),
-                };
+            let slipping: Vec<usize> = (0..ns).filter(|&j| it.status[j] == Status::Slip).collect();
+            let y_slip = match it.y {
+                Some(y) => slipping.iter().map(|&j| y[ns + j]).collect(),
+                None => {
+                    let rows: Vec<usize> = slipping.iter().map(|&j| ns + j).collect();
+                    self.y_rows(w0, mu, &rows)
+                }
+            };
+            for (&j, &y_j) in slipping.iter().zip(&y_slip) {
                 let dv = y_j - prev.v[j];
                 let u_k = prev.slip_mu[j] + dv.abs();
                 slip[j] = SlipLin {

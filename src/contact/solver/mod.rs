@@ -384,10 +384,66 @@ impl ContactSystem {
         self.eps_unit[j] / self.c * 1.0
     }
 
-    fn y_at(&self, w0: &[f64], mu: &[f64], i: usize) -> f64 {
-        let col = self.w.col(i);
-        w0[i] + (0..mu.len()).map(|j| col[j] * mu[j]).sum::<f64>()
+    /// `y_i = w0_i + (W μ)_i` for each `i` of `rows` ([`w_rows_times`]).
+    fn y_rows(&self, w0: &[f64], mu: &[f64], rows: &[usize]) -> Vec<f64> {
+        let wmu = w_rows_times(&self.w, mu, rows);
+        rows.iter().zip(wmu).map(|(&i, p)| w0[i] + p).collect()
     }
+}
+
+/// `(W x)_i` for each `i` of `rows` (`W` symmetric: row `i` is column `i`): row by row the
+/// arithmetic of `(0..m).map(|j| W[i, j] x_j).sum()` (a sum from −0.0 in the order of `j`, as
+/// `Iterator::sum` adds), the same bits, [`LANES`] rows per pass over `x` with their sums side
+/// by side. A sum alone waits on each addition to finish; eight keep the adder busy (the slip
+/// rows of [`ContactSystem::equations`] had taken a twentieth of a sweep's time one by one).
+fn w_rows_times(w: &Mat<f64>, x: &[f64], rows: &[usize]) -> Vec<f64> {
+    let m = x.len();
+    let col = |i: usize| {
+        &w.col(i)
+            .try_as_col_major()
+            .expect("contiguous columns")
+            .as_slice()[..m]
+    };
+    let mut out = Vec::with_capacity(rows.len());
+    for group in rows.chunks(LANES) {
+        // A group of fewer rows repeats its last one in the spare lanes.
+        let c: [&[f64]; LANES] = std::array::from_fn(|k| col(group[k.min(group.len() - 1)]));
+        let acc = if crate::simd::avx2() {
+            // SAFETY: the processor has AVX2 (checked above).
+            unsafe { dot_lanes_avx2(&c, x) }
+        } else {
+            dot_lanes(&c, x)
+        };
+        out.extend_from_slice(&acc[..group.len()]);
+    }
+    out
+}
+
+/// Rows per pass of [`w_rows_times`].
+const LANES: usize = 8;
+
+/// `Σ_j c[k][j] x[j]` for each lane `k`, each a sum from −0.0 in the order of `j`.
+#[inline(always)]
+fn dot_lanes(c: &[&[f64]; LANES], x: &[f64]) -> [f64; LANES] {
+    let mut acc = [-0.0f64; LANES];
+    for (j, &xj) in x.iter().enumerate() {
+        for k in 0..LANES {
+            acc[k] += c[k][j] * xj;
+        }
+    }
+    acc
+}
+
+/// [`dot_lanes`] compiled for AVX2 (the same operations in the same order).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn dot_lanes_avx2(c: &[&[f64]; LANES], x: &[f64]) -> [f64; LANES] {
+    dot_lanes(c, x)
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+unsafe fn dot_lanes_avx2(c: &[&[f64]; LANES], x: &[f64]) -> [f64; LANES] {
+    dot_lanes(c, x)
 }
 
 #[cfg(test)]
@@ -404,6 +460,45 @@ mod tests {
             prefix_order(&gap0, 12),
             vec![10, 11, 1, 6, 3, 8, 2, 7, 4, 9, 0, 5]
         );
+    }
+
+    /// Rows of `W x` eight at a time: each the bits of its own sum in the order of `j`, for
+    /// 0–17 rows (spare lanes, a repeated row), with zeros of both signs among the products.
+    #[test]
+    fn rows_of_w_times_x_together_give_the_bits_of_one_at_a_time() {
+        let m = 37;
+        let mut seed = 12345u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let mut w = Mat::<f64>::zeros(m, m);
+        for j in 0..m {
+            for i in 0..=j {
+                let v = rnd() * 10f64.powi((i % 7) as i32 - 3);
+                w[(i, j)] = v;
+                w[(j, i)] = v;
+            }
+        }
+        let mut x: Vec<f64> = (0..m).map(|_| rnd()).collect();
+        x[3] = 0.0;
+        x[5] = -0.0;
+        for count in 0..=17 {
+            let rows: Vec<usize> = (0..count).map(|k| (7 * k + 2) % m).collect();
+            let together = w_rows_times(&w, &x, &rows);
+            for (&i, t) in rows.iter().zip(&together) {
+                let alone: f64 = (0..m).map(|j| w[(i, j)] * x[j]).sum();
+                assert_eq!(t.to_bits(), alone.to_bits(), "row {i} of {count}");
+            }
+        }
+        // A row of zeros against negative zeros: the sum of −0.0 products is −0.0.
+        let z = Mat::<f64>::zeros(m, m);
+        let neg = vec![-1.0; m];
+        let s = w_rows_times(&z, &neg, &[0]);
+        let alone: f64 = (0..m).map(|j| z[(0, j)] * neg[j]).sum();
+        assert_eq!(s[0].to_bits(), alone.to_bits());
     }
 
     /// A state with the statuses given by a string: `o` open, `t` stick, `s` slip.
