@@ -20,8 +20,33 @@ pub struct Equation {
     pub gamma: f64,
     pub other: usize,
     /// `(i, c)`: rows `i` of `W` (μ indices) and their coefficients.
-    pub w: Vec<(usize, f64)>,
+    pub w: WTerms,
     pub rhs: f64,
+}
+
+/// The `(i, c)` terms of an [`Equation`]: one, in place (every row but the slip control's), or
+/// many. One heap allocation per equation and iteration had been a twentieth of a sweep's
+/// time.
+#[derive(Clone, Debug)]
+pub enum WTerms {
+    One([(usize, f64); 1]),
+    Many(Vec<(usize, f64)>),
+}
+
+impl std::ops::Deref for WTerms {
+    type Target = [(usize, f64)];
+    fn deref(&self) -> &[(usize, f64)] {
+        match self {
+            WTerms::One(t) => t,
+            WTerms::Many(t) => t,
+        }
+    }
+}
+
+impl PartialEq for WTerms {
+    fn eq(&self, other: &Self) -> bool {
+        **self == **other
+    }
 }
 
 impl Equation {
@@ -32,7 +57,7 @@ impl Equation {
             alpha: 0.0,
             gamma: 0.0,
             other: own,
-            w: vec![(own, c)],
+            w: WTerms::One([(own, c)]),
             rhs,
         }
     }
@@ -47,7 +72,7 @@ impl Equation {
 
     /// Whether the row is row `own` of `W` unchanged (a row of the block `K`).
     fn is_plain(&self) -> bool {
-        self.alpha == 0.0 && self.gamma == 0.0 && self.w == [(self.own, 1.0)]
+        self.alpha == 0.0 && self.gamma == 0.0 && *self.w == [(self.own, 1.0)]
     }
 }
 
@@ -259,7 +284,7 @@ impl ContactSystem {
                         }
                     }
                     Equation {
-                        w,
+                        w: WTerms::Many(w),
                         ..Equation::w_row(u, 0.0, rhs)
                     }
                 }
@@ -316,7 +341,7 @@ impl ContactSystem {
                 a[(r, pos[e.other])] += e.gamma;
             }
             // Row i of W over the unknowns; W is symmetric, so read its column i (contiguous).
-            for &(i, c) in &e.w {
+            for &(i, c) in e.w.iter() {
                 let col = self.w.col(i);
                 for &(mi, q, f) in &cols {
                     a[(r, q)] += c * f * col[mi];
@@ -359,7 +384,7 @@ impl ContactSystem {
                 continue;
             }
             let col = if e.gamma != 0.0 { pos[e.other] } else { r };
-            special.push(match e.w.as_slice() {
+            special.push(match &*e.w {
                 &[(i, beta)] if i == e.own => SpecialRow {
                     row: r,
                     alpha: e.alpha,

@@ -39,7 +39,7 @@ mod enforce;
 mod linalg;
 mod newton;
 
-pub use enforce::{Equation, NewtonRows, NewtonSystem, SlipLin, SpecialRow};
+pub use enforce::{Equation, NewtonRows, NewtonSystem, SlipLin, SpecialRow, WTerms};
 pub use linalg::{BlockRecord, BlockStore, LuCache, SolveTimings};
 
 use crate::friction::FrictionLaw;
