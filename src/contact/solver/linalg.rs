@@ -818,12 +818,22 @@ impl LuCache {
         // between large terms (a direction nothing holds), which its own pivots relative
         // to each other do not show; relative to the terms they do.
         let mut size = vec![0.0f64; p];
+        // Each special row's (row, col, α, γ) side by side, read p times below.
+        let at: Vec<(usize, usize, f64, f64)> = special
+            .iter()
+            .map(|s| (s.row, s.col, s.alpha, s.gamma))
+            .collect();
         for (j, sj) in special.iter().enumerate() {
             let g = &self.k_cols[sj.row];
-            for (i, si) in special.iter().enumerate() {
-                let (t1, t2) = (si.alpha * g[si.row], si.gamma * g[si.col]);
-                cap[(i, j)] = t1 + t2;
-                size[i] = size[i].max(t1.abs() + t2.abs());
+            let col = cap
+                .col_mut(j)
+                .try_as_col_major_mut()
+                .expect("contiguous columns")
+                .as_slice_mut();
+            for ((c, sz), &(row, other, alpha, gamma)) in col.iter_mut().zip(&mut size).zip(&at) {
+                let (t1, t2) = (alpha * g[row], gamma * g[other]);
+                *c = t1 + t2;
+                *sz = sz.max(t1.abs() + t2.abs());
             }
             if sj.combo.is_empty() {
                 cap[(j, j)] += sj.beta;
@@ -842,17 +852,30 @@ impl LuCache {
                     - b[sj.row];
             }
         }
-        for (i, si) in special.iter().enumerate() {
-            let k_part = if si.combo.is_empty() {
-                si.beta.abs()
-            } else {
-                si.combo.iter().map(|(_, c)| c.abs()).sum()
-            };
-            let scale = 1.0 / (size[i] + k_part).max(f64::MIN_POSITIVE);
-            for j in 0..p {
-                cap[(i, j)] *= scale;
+        let scale: Vec<f64> = special
+            .iter()
+            .zip(&size)
+            .map(|(si, sz)| {
+                let k_part = if si.combo.is_empty() {
+                    si.beta.abs()
+                } else {
+                    si.combo.iter().map(|(_, c)| c.abs()).sum()
+                };
+                1.0 / (sz + k_part).max(f64::MIN_POSITIVE)
+            })
+            .collect();
+        for j in 0..p {
+            let col = cap
+                .col_mut(j)
+                .try_as_col_major_mut()
+                .expect("contiguous columns")
+                .as_slice_mut();
+            for (c, s) in col.iter_mut().zip(&scale) {
+                *c *= s;
             }
-            rhs[(i, 0)] *= scale;
+        }
+        for (i, s) in scale.iter().enumerate() {
+            rhs[(i, 0)] *= s;
         }
         (cap, rhs)
     }
