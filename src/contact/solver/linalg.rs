@@ -97,6 +97,69 @@ unsafe fn add_columns_avx2(y: &mut [f64], cols: &[(&[f64], f64)]) {
     add_columns_with(y, cols)
 }
 
+/// `dst = A x` for a column-major `A` (`dst.len()` rows), with the arithmetic of faer's
+/// `matmul(dst, Accum::Replace, A, x, 1.0, Par::Seq)` for one column, its column-major
+/// matrix-vector kernel: each entry from +0.0, then `fma(A[i, j], x_j, ·)` over the columns in
+/// order. Here four columns per pass over `dst` (a quarter of its loads and stores), the same
+/// bits (`the_product_with_w_out_has_the_bits_of_faers`). Where the processor lacks AVX2 and
+/// FMA, faer's own (whose rounding on such a processor this does not claim to follow).
+pub(super) fn matvec_replace(dst: &mut [f64], a: faer::MatRef<'_, f64>, x: &[f64]) {
+    assert!(a.nrows() == dst.len() && a.ncols() == x.len());
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::avx2() && std::arch::is_x86_feature_detected!("fma") {
+        let m = dst.len();
+        let cols: Vec<&[f64]> = (0..a.ncols())
+            .map(|j| {
+                let c = a.col(j).try_as_col_major().expect("contiguous columns");
+                &c.as_slice()[..m]
+            })
+            .collect();
+        // SAFETY: the processor has AVX2 and FMA (checked above).
+        unsafe { matvec_fma(dst, &cols, x) };
+        return;
+    }
+    let mut out = faer::Mat::<f64>::zeros(dst.len(), 1);
+    let xm = faer::ColRef::from_slice(x);
+    faer::linalg::matmul::matmul(
+        out.as_mut(),
+        faer::Accum::Replace,
+        a,
+        xm.as_mat(),
+        1.0,
+        faer::Par::Seq,
+    );
+    for (d, o) in dst.iter_mut().zip(out.col(0).iter()) {
+        *d = *o;
+    }
+}
+
+/// The kernel of [`matvec_replace`].
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn matvec_fma(dst: &mut [f64], cols: &[&[f64]], x: &[f64]) {
+    let m = dst.len();
+    dst.fill(0.0);
+    let mut quads = cols.chunks_exact(4).zip(x.chunks_exact(4));
+    for (c, xs) in &mut quads {
+        let (c0, c1, c2, c3) = (&c[0][..m], &c[1][..m], &c[2][..m], &c[3][..m]);
+        let [x0, x1, x2, x3] = [xs[0], xs[1], xs[2], xs[3]];
+        for i in 0..m {
+            let mut v = dst[i];
+            v = c0[i].mul_add(x0, v);
+            v = c1[i].mul_add(x1, v);
+            v = c2[i].mul_add(x2, v);
+            v = c3[i].mul_add(x3, v);
+            dst[i] = v;
+        }
+    }
+    let done = cols.len() / 4 * 4;
+    for (c, &xj) in cols[done..].iter().zip(&x[done..]) {
+        for (d, &cij) in dst.iter_mut().zip(&c[..m]) {
+            *d = cij.mul_add(xj, *d);
+        }
+    }
+}
+
 /// Solves `A x = b` by a fresh LU; `None` when `A` is numerically singular.
 pub(super) fn solve_dense(a: &Mat<f64>, b: &Mat<f64>) -> Option<Mat<f64>> {
     let lu = a.partial_piv_lu();
@@ -909,22 +972,15 @@ impl LuCache {
         // Rows outside K: one product with the block W[out, K] kept with the factor, at the
         // iterate (zero on the unknowns of K not in this system). Sequential, so that the
         // sums do not depend on the number of threads.
-        let mut xk = Mat::<f64>::zeros(self.k_unk.len(), 1);
+        let mut xk = vec![0.0; self.k_unk.len()];
         for (&u, &xu) in rows.unk.iter().zip(&xs) {
-            xk[(self.k_pos[u], 0)] = xu;
+            xk[self.k_pos[u]] = xu;
         }
         let block = self.k_llt.as_ref().expect("solved with the factor");
-        let mut prod = Mat::<f64>::zeros(block.out_rows.len(), 1);
-        faer::linalg::matmul::matmul(
-            prod.as_mut(),
-            faer::Accum::Replace,
-            block.w_out.as_ref(),
-            xk.as_ref(),
-            1.0,
-            faer::Par::Seq,
-        );
-        for (r, &i) in block.out_rows.iter().enumerate() {
-            w_mu[i] = prod[(r, 0)];
+        let mut prod = vec![0.0; block.out_rows.len()];
+        matvec_replace(&mut prod, block.w_out.as_ref(), &xk);
+        for (&p, &i) in prod.iter().zip(&block.out_rows) {
+            w_mu[i] = p;
         }
         // Rows of K not in this system (nodes that left the contact): dot products.
         for &i in &self.k_unk {
@@ -1097,6 +1153,41 @@ mod tests {
         // Too small to be worth it.
         assert_eq!(leading_set(&pf, &first(PREFIX_MIN - 1)), None);
         assert_eq!(leading_set(&pf, &first(PREFIX_MIN)), Some(PREFIX_MIN));
+    }
+
+    /// `matvec_replace` gives faer's product bit for bit (the rows of `W` outside a block
+    /// times the iterate): shapes whose columns are not a multiple of four and whose rows are
+    /// not of the vector width, with zeros of both signs in `x`.
+    #[test]
+    fn the_product_with_w_out_has_the_bits_of_faers() {
+        for (rows, cols) in [(1, 1), (3, 5), (7, 4), (33, 17), (200, 123), (64, 256)] {
+            let (w, mut x) = w_and_mu(rows.max(cols));
+            x.truncate(cols);
+            x[0] = -0.0;
+            if cols > 2 {
+                x[2] = 0.0;
+            }
+            let a = w.as_ref().submatrix(0, 0, rows, cols);
+            let mut ours = vec![f64::NAN; rows];
+            matvec_replace(&mut ours, a, &x);
+            let mut theirs = Mat::<f64>::zeros(rows, 1);
+            let xm = Mat::from_fn(cols, 1, |i, _| x[i]);
+            faer::linalg::matmul::matmul(
+                theirs.as_mut(),
+                faer::Accum::Replace,
+                a,
+                xm.as_ref(),
+                1.0,
+                faer::Par::Seq,
+            );
+            for i in 0..rows {
+                assert_eq!(
+                    ours[i].to_bits(),
+                    theirs[(i, 0)].to_bits(),
+                    "{rows} x {cols}, row {i}"
+                );
+            }
+        }
     }
 
     /// A symmetric `m × m` matrix and a vector of forces, both from a fixed sequence.
