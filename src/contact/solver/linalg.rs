@@ -97,6 +97,86 @@ unsafe fn add_columns_avx2(y: &mut [f64], cols: &[(&[f64], f64)]) {
     add_columns_with(y, cols)
 }
 
+/// `y1 += Σ_j W[:, j] a_j` and `y2 += Σ_j W[:, j] b_j` over the nonzero `a_j`, `b_j`, in one
+/// pass over the columns of `W`: each output gets its terms in increasing `j`, one after the
+/// other, so each is bit for bit what [`add_columns`] gives it alone
+/// (`two_products_in_one_pass_give_the_bits_of_one_at_a_time`), and `W` (8 MB on L5) is read
+/// once for both.
+pub(super) fn add_columns_pair(y1: &mut [f64], y2: &mut [f64], w: &Mat<f64>, a: &[f64], b: &[f64]) {
+    let m = y1.len();
+    assert!(y2.len() == m && a.len() == b.len() && a.len() <= w.ncols());
+    let cols: Vec<(&[f64], f64, f64)> = (0..a.len())
+        .filter(|&j| a[j] != 0.0 || b[j] != 0.0)
+        .map(|j| {
+            let c = w.col(j).try_as_col_major().expect("contiguous columns");
+            (&c.as_slice()[..m], a[j], b[j])
+        })
+        .collect();
+    if crate::simd::avx2() {
+        // SAFETY: the processor has AVX2 (checked above).
+        unsafe { add_columns_pair_avx2(y1, y2, &cols) }
+    } else {
+        add_columns_pair_with(y1, y2, &cols)
+    }
+}
+
+#[inline(always)]
+fn add_columns_pair_with(y1: &mut [f64], y2: &mut [f64], cols: &[(&[f64], f64, f64)]) {
+    let m = y1.len();
+    let (y1, y2) = (&mut y1[..m], &mut y2[..m]);
+    let mut quads = cols.chunks_exact(4);
+    for quad in &mut quads {
+        if quad.iter().all(|&(_, a, b)| a != 0.0 && b != 0.0) {
+            let [(c0, a0, b0), (c1, a1, b1), (c2, a2, b2), (c3, a3, b3)] =
+                [quad[0], quad[1], quad[2], quad[3]];
+            let (c0, c1, c2, c3) = (&c0[..m], &c1[..m], &c2[..m], &c3[..m]);
+            for i in 0..m {
+                let (w0, w1, w2, w3) = (c0[i], c1[i], c2[i], c3[i]);
+                let mut u = y1[i];
+                u += w0 * a0;
+                u += w1 * a1;
+                u += w2 * a2;
+                u += w3 * a3;
+                y1[i] = u;
+                let mut v = y2[i];
+                v += w0 * b0;
+                v += w1 * b1;
+                v += w2 * b2;
+                v += w3 * b3;
+                y2[i] = v;
+            }
+        } else {
+            pair_one_by_one(y1, y2, quad);
+        }
+    }
+    pair_one_by_one(y1, y2, quads.remainder());
+}
+
+/// The terms of [`add_columns_pair_with`] one column at a time.
+#[inline(always)]
+fn pair_one_by_one(y1: &mut [f64], y2: &mut [f64], cols: &[(&[f64], f64, f64)]) {
+    for &(c, a, b) in cols {
+        if a != 0.0 {
+            axpy_with(y1, a, c);
+        }
+        if b != 0.0 {
+            axpy_with(y2, b, c);
+        }
+    }
+}
+
+/// [`add_columns_pair_with`] compiled for AVX2 (the same operations in the same order).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn add_columns_pair_avx2(y1: &mut [f64], y2: &mut [f64], cols: &[(&[f64], f64, f64)]) {
+    add_columns_pair_with(y1, y2, cols)
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+unsafe fn add_columns_pair_avx2(y1: &mut [f64], y2: &mut [f64], cols: &[(&[f64], f64, f64)]) {
+    add_columns_pair_with(y1, y2, cols)
+}
+
 /// `dst = A x` for a column-major `A` (`dst.len()` rows), with the arithmetic of faer's
 /// `matmul(dst, Accum::Replace, A, x, 1.0, Par::Seq)` for one column, its column-major
 /// matrix-vector kernel: each entry from +0.0, then `fma(A[i, j], x_j, ·)` over the columns in
@@ -232,6 +312,10 @@ pub struct LuCache {
     /// has one (see [`Self::recall_w_mu`]).
     products: Vec<(Vec<f64>, Vec<f64>)>,
     prediction: Option<f64>,
+    /// Without the shortcuts: `(w0, μ, y = w0 + W μ)` for the predicted start of the next
+    /// step, computed with the last step's converged `y` in the same pass over `W` (see
+    /// [`Self::take_next_y`]).
+    next_y: Option<(Vec<f64>, Vec<f64>, Vec<f64>)>,
     /// With the shortcuts: the special rows (positions in `K`) and the LU of the last
     /// capacitance system factorised, which preconditions GMRES on the next system with the
     /// same rows (see [`CAPACITANCE_REUSE_FROM`]).
@@ -530,12 +614,35 @@ impl LuCache {
         self.unk.clear();
         self.forget_block();
         self.products.clear();
+        self.next_y = None;
     }
 
     /// The start of the next step is extrapolated from the last two converged states by `t`
     /// (`μ = μ₁ + t (μ₁ − μ₀)`, normal forces clipped at zero), or not extrapolated (`None`).
     pub fn predict_with(&mut self, t: Option<f64>) {
         self.prediction = t;
+    }
+
+    /// The extrapolation factor announced for the step being solved ([`Self::predict_with`]),
+    /// if it has not been used.
+    pub(super) fn prediction(&self) -> Option<f64> {
+        self.prediction
+    }
+
+    /// Keeps `y = w0 + W μ` at the predicted start `μ` of the next step (see
+    /// [`Self::take_next_y`]).
+    pub(super) fn keep_next_y(&mut self, w0: &[f64], mu: Vec<f64>, y: Vec<f64>) {
+        self.next_y = Some((w0.to_vec(), mu, y));
+    }
+
+    /// `y = w0 + W μ` if [`Self::keep_next_y`] kept it for exactly these `w0` and `μ` (bit for
+    /// bit: a product of its own would give the same bits), once.
+    pub(super) fn take_next_y(&mut self, w0: &[f64], mu: &[f64]) -> Option<Vec<f64>> {
+        let same = |a: &[f64], b: &[f64]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+        };
+        let (w, m, y) = self.next_y.take()?;
+        (same(&w, w0) && same(&m, mu)).then_some(y)
     }
 
     /// Keeps `W μ` of a converged iterate `μ` (with the shortcuts, from the last solve).
@@ -1186,6 +1293,45 @@ mod tests {
                     theirs[(i, 0)].to_bits(),
                     "{rows} x {cols}, row {i}"
                 );
+            }
+        }
+    }
+
+    /// Two products with `W` in one pass give each the bits of its own `add_columns`:
+    /// coefficient vectors with zeros in different places (so that some groups of four
+    /// columns take the one-by-one path), lengths that are not multiples of four.
+    #[test]
+    fn two_products_in_one_pass_give_the_bits_of_one_at_a_time() {
+        for m in [1, 5, 12, 37, 130] {
+            let (w, a) = w_and_mu(m);
+            let mut b: Vec<f64> = a.iter().map(|v| 0.7 * v - 0.01).collect();
+            let mut a = a;
+            for j in (0..m).step_by(3) {
+                a[j] = 0.0;
+            }
+            for j in (1..m).step_by(5) {
+                b[j] = 0.0;
+            }
+            if m > 8 {
+                // A run of columns where both are nonzero, for the four-column path.
+                for j in 4..8 {
+                    a[j] = 0.25 + j as f64;
+                    b[j] = -0.5 - j as f64;
+                }
+            }
+            let y0: Vec<f64> = (0..m).map(|i| 1e-3 * i as f64 - 0.02).collect();
+            let (mut y1, mut y2) = (y0.clone(), y0.clone());
+            add_columns_pair(&mut y1, &mut y2, &w, &a, &b);
+            let alone = |c: &[f64]| {
+                let mut y = y0.clone();
+                let terms = c.iter().enumerate().filter(|&(_, &v)| v != 0.0);
+                add_columns(&mut y, &w, terms.map(|(j, &v)| (j, v)));
+                y
+            };
+            let (e1, e2) = (alone(&a), alone(&b));
+            for i in 0..m {
+                assert_eq!(y1[i].to_bits(), e1[i].to_bits(), "m = {m}, first, row {i}");
+                assert_eq!(y2[i].to_bits(), e2[i].to_bits(), "m = {m}, second, row {i}");
             }
         }
     }

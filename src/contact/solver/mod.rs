@@ -326,6 +326,13 @@ impl ContactSystem {
         y
     }
 
+    /// `y = w0 + W μ` and `w0 + W ν` in one pass over `W`, each bit for bit [`Self::y`].
+    fn y_pair(&self, w0: &[f64], mu: &[f64], nu: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let (mut y1, mut y2) = (w0.to_vec(), w0.to_vec());
+        linalg::add_columns_pair(&mut y1, &mut y2, &self.w, mu, nu);
+        (y1, y2)
+    }
+
     fn m(&self) -> usize {
         2 * self.ns + self.kg.len()
     }

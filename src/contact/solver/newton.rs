@@ -267,7 +267,10 @@ impl ContactSystem {
             };
             let y: Vec<f64> = match &recalled {
                 Some(p) => plus_w0(p),
-                None => self.y(w0, &mu),
+                None => match cache.as_deref_mut().and_then(|c| c.take_next_y(w0, &mu)) {
+                    Some(y) => y,
+                    None => self.y(w0, &mu),
+                },
             };
             // Sets from the current iterate (without a guess, the first iteration keeps the
             // committed sets).
@@ -324,7 +327,20 @@ impl ContactSystem {
                         // again: on the rows of the system `y` is what they impose, off the
                         // product by the solve's error, which near a force-controlled peak
                         // was enough to move the bracketed Q_max (L3, `tests/sweep.rs`).
-                        let y = if exact { self.y(w0, &mu) } else { y };
+                        let y = match (exact, cache.as_deref_mut()) {
+                            // With it, `y` at the start the driver will most likely predict
+                            // for the next step (the increments are mostly equal), from the
+                            // same pass over `W`: the next step's first product, if it is
+                            // that start bit for bit.
+                            (true, Some(c)) => {
+                                let next = predicted_start(&mu, prev, ns, c.prediction());
+                                let (y, y_next) = self.y_pair(w0, &mu, &next);
+                                c.keep_next_y(w0, next, y_next);
+                                y
+                            }
+                            (true, None) => self.y(w0, &mu),
+                            (false, _) => y,
+                        };
                         if let (Some(c), Some(p)) = (cache.as_deref_mut(), recalled)
                             && !exact
                         {
@@ -544,6 +560,23 @@ impl ContactSystem {
             last_update,
         }
     }
+}
+
+/// The forces the driver predicts for the start of the step after one that converged at `mu`
+/// from `prev` (`crate::driver`'s extrapolation by the ratio `t` of the increments, its
+/// arithmetic entry by entry, normal forces clipped at zero), taking the next ratio to be this
+/// step's, or 1 (equal increments).
+fn predicted_start(mu: &[f64], prev: &State, ns: usize, t: Option<f64>) -> Vec<f64> {
+    let t = t.unwrap_or(1.0);
+    let old = prev.f_n.iter().chain(&prev.f_t).chain(&prev.z);
+    mu.iter()
+        .zip(old)
+        .enumerate()
+        .map(|(i, (&c, &o))| {
+            let e = c + t * (c - o);
+            if i < ns { e.max(0.0) } else { e }
+        })
+        .collect()
 }
 
 /// Contact unknowns (`2 ns` plus anchors) from which the structured solve takes its shortcuts
