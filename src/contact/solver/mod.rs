@@ -433,6 +433,8 @@ const LANES: usize = 8;
 #[inline(always)]
 fn dot_lanes(c: &[&[f64]; LANES], x: &[f64]) -> [f64; LANES] {
     let mut acc = [-0.0f64; LANES];
+    // Every lane as long as `x`: no bounds check in the loop.
+    let c: [&[f64]; LANES] = std::array::from_fn(|k| &c[k][..x.len()]);
     for (j, &xj) in x.iter().enumerate() {
         for k in 0..LANES {
             acc[k] += c[k][j] * xj;
