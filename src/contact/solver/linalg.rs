@@ -72,17 +72,22 @@ fn add_columns_with(y: &mut [f64], cols: &[(&[f64], f64)]) {
         let [(c0, a0), (c1, a1), (c2, a2), (c3, a3)] = [quad[0], quad[1], quad[2], quad[3]];
         let (c0, c1, c2, c3) = (&c0[..m], &c1[..m], &c2[..m], &c3[..m]);
         for i in 0..m {
-            let mut v = y[i];
-            v += c0[i] * a0;
-            v += c1[i] * a1;
-            v += c2[i] * a2;
-            v += c3[i] * a3;
-            y[i] = v;
+            y[i] = add_four(y[i], [c0[i], c1[i], c2[i], c3[i]], [a0, a1, a2, a3]);
         }
     }
     for &(c, a) in quads.remainder() {
         axpy_with(y, a, c);
     }
+}
+
+/// `v + w₀a₀ + w₁a₁ + w₂a₂ + w₃a₃`, added in that order (each product rounded, then added).
+#[inline(always)]
+fn add_four(mut v: f64, w: [f64; 4], a: [f64; 4]) -> f64 {
+    v += w[0] * a[0];
+    v += w[1] * a[1];
+    v += w[2] * a[2];
+    v += w[3] * a[3];
+    v
 }
 
 /// [`add_columns_with`] compiled for AVX2 (the same operations in the same order).
@@ -131,19 +136,9 @@ fn add_columns_pair_with(y1: &mut [f64], y2: &mut [f64], cols: &[(&[f64], f64, f
                 [quad[0], quad[1], quad[2], quad[3]];
             let (c0, c1, c2, c3) = (&c0[..m], &c1[..m], &c2[..m], &c3[..m]);
             for i in 0..m {
-                let (w0, w1, w2, w3) = (c0[i], c1[i], c2[i], c3[i]);
-                let mut u = y1[i];
-                u += w0 * a0;
-                u += w1 * a1;
-                u += w2 * a2;
-                u += w3 * a3;
-                y1[i] = u;
-                let mut v = y2[i];
-                v += w0 * b0;
-                v += w1 * b1;
-                v += w2 * b2;
-                v += w3 * b3;
-                y2[i] = v;
+                let w = [c0[i], c1[i], c2[i], c3[i]];
+                y1[i] = add_four(y1[i], w, [a0, a1, a2, a3]);
+                y2[i] = add_four(y2[i], w, [b0, b1, b2, b3]);
             }
         } else {
             pair_one_by_one(y1, y2, quad);
@@ -198,7 +193,12 @@ pub(super) fn matvec_replace(dst: &mut [f64], a: faer::MatRef<'_, f64>, x: &[f64
         unsafe { matvec_fma(dst, &cols, x) };
         return;
     }
-    let mut out = faer::Mat::<f64>::zeros(dst.len(), 1);
+    dst.copy_from_slice(&faer_matvec(a, x));
+}
+
+/// `A x` by faer's `matmul` (`Accum::Replace`, `alpha = 1`, sequential).
+fn faer_matvec(a: faer::MatRef<'_, f64>, x: &[f64]) -> Vec<f64> {
+    let mut out = faer::Mat::<f64>::zeros(a.nrows(), 1);
     let xm = faer::ColRef::from_slice(x);
     faer::linalg::matmul::matmul(
         out.as_mut(),
@@ -208,9 +208,7 @@ pub(super) fn matvec_replace(dst: &mut [f64], a: faer::MatRef<'_, f64>, x: &[f64
         1.0,
         faer::Par::Seq,
     );
-    for (d, o) in dst.iter_mut().zip(out.col(0).iter()) {
-        *d = *o;
-    }
+    out.col(0).iter().copied().collect()
 }
 
 /// The kernel of [`matvec_replace`].
@@ -1277,20 +1275,11 @@ mod tests {
             let a = w.as_ref().submatrix(0, 0, rows, cols);
             let mut ours = vec![f64::NAN; rows];
             matvec_replace(&mut ours, a, &x);
-            let mut theirs = Mat::<f64>::zeros(rows, 1);
-            let xm = Mat::from_fn(cols, 1, |i, _| x[i]);
-            faer::linalg::matmul::matmul(
-                theirs.as_mut(),
-                faer::Accum::Replace,
-                a,
-                xm.as_ref(),
-                1.0,
-                faer::Par::Seq,
-            );
+            let theirs = faer_matvec(a, &x);
             for i in 0..rows {
                 assert_eq!(
                     ours[i].to_bits(),
-                    theirs[(i, 0)].to_bits(),
+                    theirs[i].to_bits(),
                     "{rows} x {cols}, row {i}"
                 );
             }
