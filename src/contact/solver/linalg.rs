@@ -215,25 +215,44 @@ fn faer_matvec(a: faer::MatRef<'_, f64>, x: &[f64]) -> Vec<f64> {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn matvec_fma(dst: &mut [f64], cols: &[&[f64]], x: &[f64]) {
-    let m = dst.len();
     dst.fill(0.0);
-    let mut quads = cols.chunks_exact(4).zip(x.chunks_exact(4));
-    for (c, xs) in &mut quads {
-        let (c0, c1, c2, c3) = (&c[0][..m], &c[1][..m], &c[2][..m], &c[3][..m]);
-        let [x0, x1, x2, x3] = [xs[0], xs[1], xs[2], xs[3]];
+    fma_columns(dst, cols.len(), |j| cols[j], |j| x[j]);
+}
+
+/// `dst_i = fma(c_j[i], a_j, dst_i)` for the columns `j < count` in order (`c_j = col(j)`, at
+/// least as long as `dst`, `a_j = coef(j)`), four columns per pass over `dst`: the same bits as
+/// one column at a time.
+#[inline(always)]
+fn fma_columns<'c>(
+    dst: &mut [f64],
+    count: usize,
+    col: impl Fn(usize) -> &'c [f64],
+    coef: impl Fn(usize) -> f64,
+) {
+    let m = dst.len();
+    let mut j = 0;
+    while j + 4 <= count {
+        let (c0, c1, c2, c3) = (
+            &col(j)[..m],
+            &col(j + 1)[..m],
+            &col(j + 2)[..m],
+            &col(j + 3)[..m],
+        );
+        let (a0, a1, a2, a3) = (coef(j), coef(j + 1), coef(j + 2), coef(j + 3));
         for i in 0..m {
             let mut v = dst[i];
-            v = c0[i].mul_add(x0, v);
-            v = c1[i].mul_add(x1, v);
-            v = c2[i].mul_add(x2, v);
-            v = c3[i].mul_add(x3, v);
+            v = c0[i].mul_add(a0, v);
+            v = c1[i].mul_add(a1, v);
+            v = c2[i].mul_add(a2, v);
+            v = c3[i].mul_add(a3, v);
             dst[i] = v;
         }
+        j += 4;
     }
-    let done = cols.len() / 4 * 4;
-    for (c, &xj) in cols[done..].iter().zip(&x[done..]) {
-        for (d, &cij) in dst.iter_mut().zip(&c[..m]) {
-            *d = cij.mul_add(xj, *d);
+    for j in j..count {
+        let (c, a) = (&col(j)[..m], coef(j));
+        for (v, &cij) in dst.iter_mut().zip(c) {
+            *v = cij.mul_add(a, *v);
         }
     }
 }
@@ -464,18 +483,26 @@ impl Block {
     /// trailing block `L[q0.., q0..]` alone (`q0 = 0`: the whole solve). The columns of `G` are
     /// those of slip rows, which (ordered by initial gap, or tangential after normal) sit late
     /// in the block: on Fig. 2 at L7 this takes most of the forward half of their cost.
+    /// One right-hand side (a direct solve) takes its forward sweep from [`forward_one`],
+    /// faer's arithmetic four columns per pass: the 50-law sweep 2.071 → 1.967 s, faster in
+    /// 8 of 8 pairs (`SWEEP_AB_SINGLE=0 benches/sweep_ab.sh 8`). The backward sweep written
+    /// the same way (faer's dot products, bit for bit) gained nothing measurable (1.995 →
+    /// 1.987 s, 3 of 8 pairs) and is faer's.
     fn solve_in_place_below(&self, b: &mut Mat<f64>, q0: usize) {
         use faer::linalg::triangular_solve as tri;
         let par = faer::Par::Seq;
         let l = self.l();
         let n = l.nrows();
         let q0 = q0.min(n);
-        tri::solve_lower_triangular_in_place_with_conj(
-            l.submatrix(q0, q0, n - q0, n - q0),
-            faer::Conj::No,
-            b.as_mut().subrows_mut(q0, n - q0),
-            par,
-        );
+        let lower = l.submatrix(q0, q0, n - q0, n - q0);
+        if b.ncols() != 1 || !forward_one(lower, b.col_mut(0).subrows_mut(q0, n - q0)) {
+            tri::solve_lower_triangular_in_place_with_conj(
+                lower,
+                faer::Conj::No,
+                b.as_mut().subrows_mut(q0, n - q0),
+                par,
+            );
+        }
         tri::solve_upper_triangular_in_place_with_conj(
             l.transpose(),
             faer::Conj::Yes,
@@ -483,6 +510,94 @@ impl Block {
             par,
         );
     }
+}
+
+/// Solves `L y = b` in place for one right-hand side with the arithmetic of faer's
+/// `solve_lower_triangular_in_place` (sequential, one column): the same recursive halving
+/// (`faer_block_size`), the same closed forms on blocks of at most four rows, and each
+/// off-diagonal block applied as faer's column-major matrix-vector product does it, every entry
+/// `fma(L[i, j], −y_j, b_i)` over the columns in order; here four columns per pass over `b`
+/// (a quarter of its loads and stores), the same bits
+/// (`the_forward_sweep_has_the_bits_of_faers`). `false` (nothing done) where the processor lacks
+/// AVX2 and FMA, or `L` or `b` is not contiguous by columns: faer's own then.
+fn forward_one(l: faer::MatRef<'_, f64>, b: faer::ColMut<'_, f64>) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::avx2()
+        && std::arch::is_x86_feature_detected!("fma")
+        && l.row_stride() == 1
+        && l.nrows() > 0
+        && b.row_stride() == 1
+    {
+        let b = b.try_as_col_major_mut().expect("unit row stride");
+        let n = l.nrows();
+        let ld = l.col_stride() as usize;
+        // SAFETY: column-major with leading dimension `ld`, `n` columns of `n` rows.
+        let data = unsafe { std::slice::from_raw_parts(l.as_ptr(), ld * (n - 1) + n) };
+        // SAFETY: the processor has AVX2 and FMA (checked above).
+        unsafe { forward_fma(data, ld, 0, b.as_slice_mut()) };
+        return true;
+    }
+    let _ = (l, b);
+    false
+}
+
+/// The split of faer's recursive triangular solve: the rows of the leading block of `n`.
+fn faer_block_size(n: usize) -> usize {
+    let half = n / 2;
+    n - if n >= 32 {
+        half.div_ceil(16) * 16
+    } else if n >= 16 {
+        half.div_ceil(8) * 8
+    } else if n >= 8 {
+        half.div_ceil(4) * 4
+    } else {
+        half
+    }
+}
+
+/// [`forward_one`] on the diagonal block of `L` (column-major in `l`, leading dimension `ld`)
+/// that starts at row and column `off`, of order `x.len()`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn forward_fma(l: &[f64], ld: usize, off: usize, x: &mut [f64]) {
+    let n = x.len();
+    let at = |i: usize, j: usize| l[(off + j) * ld + off + i];
+    if n <= 4 {
+        // faer's closed forms, with their order of operations.
+        let inv: [f64; 4] = std::array::from_fn(|i| if i < n { at(i, i).recip() } else { 0.0 });
+        let y0 = x[0] * inv[0];
+        x[0] = y0;
+        if n == 1 {
+            return;
+        }
+        let y1 = x[1] * inv[1] + (-at(1, 0) * inv[1]) * y0;
+        x[1] = y1;
+        if n == 2 {
+            return;
+        }
+        let y2 = x[2] * inv[2] + (-at(2, 0) * inv[2]) * y0 + (-at(2, 1) * inv[2]) * y1;
+        x[2] = y2;
+        if n == 3 {
+            return;
+        }
+        x[3] = x[3] * inv[3]
+            + (-at(3, 0) * inv[3]) * y0
+            + (-at(3, 1) * inv[3]) * y1
+            + (-at(3, 2) * inv[3]) * y2;
+        return;
+    }
+    let bs = faer_block_size(n);
+    // SAFETY: the caller's (AVX2 and FMA).
+    unsafe { forward_fma(l, ld, off, &mut x[..bs]) };
+    let (top, bot) = x.split_at_mut(bs);
+    let m = bot.len();
+    let col = |j: usize| {
+        let s = (off + j) * ld + off + bs;
+        &l[s..s + m]
+    };
+    fma_columns(bot, bs, col, |j| -top[j]);
+    // SAFETY: the caller's (AVX2 and FMA).
+    unsafe { forward_fma(l, ld, off + bs, bot) };
 }
 
 /// Block unknowns from which the columns of `G` skip the zero rows of the forward sweep
@@ -1321,6 +1436,54 @@ mod tests {
             for i in 0..m {
                 assert_eq!(y1[i].to_bits(), e1[i].to_bits(), "m = {m}, first, row {i}");
                 assert_eq!(y2[i].to_bits(), e2[i].to_bits(), "m = {m}, second, row {i}");
+            }
+        }
+    }
+
+    /// The forward sweep of one right-hand side gives faer's bits: orders that take every
+    /// branch of the recursive split (below 8, 8–15, 16–31, 32 and up) and each closed form
+    /// (blocks of 1–4 rows), on a trailing block of a larger factor (a leading dimension
+    /// larger than the order), with a zero and a negative zero in the right-hand side.
+    #[test]
+    fn the_forward_sweep_has_the_bits_of_faers() {
+        let (w, b0) = w_and_mu(300);
+        // A well-conditioned lower triangle: W's lower part with a heavy diagonal.
+        let big = Mat::from_fn(300, 300, |i, j| {
+            if i == j {
+                4.0 + w[(i, j)].abs()
+            } else if i > j {
+                w[(i, j)]
+            } else {
+                0.0
+            }
+        });
+        for n in [
+            1, 2, 3, 4, 5, 7, 8, 11, 15, 16, 23, 31, 32, 33, 47, 64, 100, 257,
+        ] {
+            let off = 300 - n;
+            let l = big.as_ref().submatrix(off, off, n, n);
+            let mut rhs = Mat::from_fn(n, 1, |i, _| b0[i]);
+            rhs[(0, 0)] = -0.0;
+            if n > 2 {
+                rhs[(2, 0)] = 0.0;
+            }
+            let mut theirs = rhs.clone();
+            faer::linalg::triangular_solve::solve_lower_triangular_in_place_with_conj(
+                l,
+                faer::Conj::No,
+                theirs.as_mut(),
+                faer::Par::Seq,
+            );
+            if !forward_one(l, rhs.col_mut(0)) {
+                // No AVX2 and FMA here: faer's own runs, nothing to compare.
+                return;
+            }
+            for i in 0..n {
+                assert_eq!(
+                    rhs[(i, 0)].to_bits(),
+                    theirs[(i, 0)].to_bits(),
+                    "order {n}, row {i}"
+                );
             }
         }
     }
