@@ -569,16 +569,12 @@ impl Driver<'_> {
 /// The predicted forces of the next step: the last two states extrapolated by `t` (the ratio
 /// of the next increment to the last), normal forces kept non-negative.
 fn predict(prev: &State, old: &State, t: f64) -> State {
-    let ext = |c: &[f64], o: &[f64]| -> Vec<f64> {
-        c.iter().zip(o).map(|(c, o)| c + t * (c - o)).collect()
-    };
     let mut g = prev.clone();
     g.status = solver::predict_slip(prev, old, t);
-    g.f_n = ext(&prev.f_n, &old.f_n)
-        .into_iter()
-        .map(|v| v.max(0.0))
-        .collect();
-    g.f_t = ext(&prev.f_t, &old.f_t);
-    g.z = ext(&prev.z, &old.z);
+    [g.f_n, g.f_t, g.z] = solver::predicted_forces(
+        [&prev.f_n, &prev.f_t, &prev.z],
+        [&old.f_n, &old.f_t, &old.z],
+        t,
+    );
     g
 }

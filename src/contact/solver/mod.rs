@@ -119,6 +119,21 @@ pub struct State {
     pub mean_slip: f64,
 }
 
+/// The forces of the next step's predicted start, in μ order (`F_n`, `F_t`, `z`): those of
+/// `now` extrapolated from `before` by `t` (the ratio of the next load increment to the last),
+/// `now + t (now − before)` entry by entry, the normal forces clipped at zero. The driver's
+/// predictor, and the start whose `y` the solver computes ahead ([`LuCache::take_next_y`]).
+pub fn predicted_forces(now: [&[f64]; 3], before: [&[f64]; 3], t: f64) -> [Vec<f64>; 3] {
+    let ext = |c: &[f64], o: &[f64]| -> Vec<f64> {
+        c.iter().zip(o).map(|(c, o)| c + t * (c - o)).collect()
+    };
+    let f_n = ext(now[0], before[0])
+        .into_iter()
+        .map(|v| v.max(0.0))
+        .collect();
+    [f_n, ext(now[1], before[1]), ext(now[2], before[2])]
+}
+
 /// The statuses of the next step's predicted start: those of `prev`, with the stick nodes that
 /// the slip fronts will pass if they move on as they did from `old` to `prev` (by `t` times as
 /// far) predicted to slip. A stick node `d` nodes along the face from the nearest slip node of

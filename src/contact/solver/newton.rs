@@ -562,21 +562,18 @@ impl ContactSystem {
     }
 }
 
-/// The forces the driver predicts for the start of the step after one that converged at `mu`
-/// from `prev` (`crate::driver`'s extrapolation by the ratio `t` of the increments, its
-/// arithmetic entry by entry, normal forces clipped at zero), taking the next ratio to be this
-/// step's, or 1 (equal increments).
+/// The forces the driver predicts ([`super::predicted_forces`]) for the start of the step after
+/// one that converged at `mu` from `prev`, in μ order, taking the next ratio of the increments
+/// to be this step's, or 1 (equal increments).
 fn predicted_start(mu: &[f64], prev: &State, ns: usize, t: Option<f64>) -> Vec<f64> {
-    let t = t.unwrap_or(1.0);
-    let old = prev.f_n.iter().chain(&prev.f_t).chain(&prev.z);
-    mu.iter()
-        .zip(old)
-        .enumerate()
-        .map(|(i, (&c, &o))| {
-            let e = c + t * (c - o);
-            if i < ns { e.max(0.0) } else { e }
-        })
-        .collect()
+    let (f_n, rest) = mu.split_at(ns);
+    let (f_t, z) = rest.split_at(ns);
+    super::predicted_forces(
+        [f_n, f_t, z],
+        [&prev.f_n, &prev.f_t, &prev.z],
+        t.unwrap_or(1.0),
+    )
+    .concat()
 }
 
 /// Contact unknowns (`2 ns` plus anchors) from which the structured solve takes its shortcuts
