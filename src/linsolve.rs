@@ -1838,15 +1838,24 @@ mod tests {
         let (w, c) = tree.delassus(true).unwrap();
         let (w_product, c_product) = faer.delassus(true).unwrap();
         let wmax = (0..m).map(|i| w[(i, i)].abs()).fold(0.0, f64::max);
+        let (c, cp) = (c.as_ref().unwrap(), c_product.as_ref().unwrap());
+        let cmax = (0..m).map(|i| cp[(i, i)].abs()).fold(0.0, f64::max);
+        let (mut worst_w, mut worst_c) = (0.0f64, 0.0f64);
         for j in 0..m {
             for i in 0..m {
                 assert_eq!(w[(i, j)].to_bits(), w[(j, i)].to_bits(), "symmetric");
-                let d = (w[(i, j)] - w_product[(i, j)]).abs();
-                assert!(d <= 1e-13 * wmax, "W[{i},{j}] differs by {d:e}");
-                let (c, cp) = (c.as_ref().unwrap(), c_product.as_ref().unwrap());
-                assert_eq!(c[(i, j)].to_bits(), cp[(i, j)].to_bits(), "C[{i},{j}]");
+                worst_w = worst_w.max((w[(i, j)] - w_product[(i, j)]).abs());
+                // The root's constraint block is factorised apart from the separator's
+                // columns before it: C is the product path's within round-off.
+                worst_c = worst_c.max((c[(i, j)] - cp[(i, j)]).abs());
+                if i < j {
+                    assert_eq!(c[(i, j)], 0.0, "C lower");
+                }
             }
         }
+
+        assert!(worst_w <= 4e-15 * wmax, "W differs by {worst_w:e}");
+        assert!(worst_c <= 4e-15 * cmax, "C differs by {worst_c:e}");
         for (i, j) in [(0, 0), (3, 17), (60, 61), (119, 2)] {
             let mut x = vec![0.0; n];
             y[j].iter().for_each(|&(r, v)| x[r] += v);
@@ -1867,11 +1876,12 @@ mod tests {
     }
 
     /// The factorisation on the elimination tree's schedule (`crate::supernodal`) gives
-    /// faer's factor bit for bit, on one, two or three threads: a 2-D grid ordered by nested
+    /// faer's factor bit for bit below the root and within round-off in it (factorised in two
+    /// stages), the same bits on one, two or three threads: a 2-D grid ordered by nested
     /// dissection (independent subtrees under the top separators) with 120 constraint rows,
     /// whose dense block takes the updates split over its columns.
     #[test]
-    fn the_tree_scheduled_factor_is_faers_bit_for_bit() {
+    fn the_tree_scheduled_factor_is_faers_below_the_root_bit_for_bit() {
         if !crate::supernodal::available() {
             eprintln!("no AVX2 and FMA here: faer's loop is the only one");
             return;
@@ -1907,10 +1917,37 @@ mod tests {
         };
         let faer = bits(1, false);
         assert!(faer.iter().any(|&b| f64::from_bits(b) != 0.0));
-        for k in [1, 2, 3] {
-            assert!(bits(k, true) == faer, "{k} threads: not faer's bits");
-        }
         assert!(bits(2, false) == faer, "faer's loop on 2 threads");
+        // The root (the top separator's columns and the constraint block) is factorised in two
+        // stages that leave W between them, so its values are faer's within round-off; every
+        // other supernode's are faer's bits.
+        let root = lay.val_ptr[lay.begin.len() - 2];
+        let root_start = lay.begin[lay.begin.len() - 2];
+        assert!(
+            root_start < sym.n && *lay.begin.last().unwrap() == sym.n + sym.m,
+            "a root holding separator columns before the constraint block"
+        );
+        let tree = bits(1, true);
+        assert!(
+            tree[..root] == faer[..root],
+            "not faer's bits below the root"
+        );
+        let (ours, theirs): (Vec<f64>, Vec<f64>) = (
+            tree[root..].iter().map(|&b| f64::from_bits(b)).collect(),
+            faer[root..].iter().map(|&b| f64::from_bits(b)).collect(),
+        );
+        let scale = theirs.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let worst = ours
+            .iter()
+            .zip(&theirs)
+            .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        assert!(
+            worst <= 1e-15 * scale,
+            "root off faer's by {worst:e} (scale {scale:e})"
+        );
+        for k in [2, 3] {
+            assert!(bits(k, true) == tree, "{k} threads: not 1 thread's bits");
+        }
     }
 
     /// A zero pivot in one of the subtrees is an error naming the column where faer's loop

@@ -18,7 +18,7 @@
 //! factorisation at L5 was no faster than the 1-thread one, with ~180 000 futex calls at L7).
 //!
 //! The values are those of faer's loop with sequential kernels, bit for bit
-//! (`linsolve::tests::the_tree_scheduled_factor_is_faers_bit_for_bit`), and do not depend on the number of threads:
+//! (`linsolve::tests::the_tree_scheduled_factor_is_faers_below_the_root_bit_for_bit`), and do not depend on the number of threads:
 //! the partition into subtrees is fixed by the tree alone, and every update is a sequential
 //! kernel call on its own columns.
 //!
@@ -568,7 +568,7 @@ unsafe fn supernode(
     work: &mut Work,
     par: Par,
     split: bool,
-    mut schur: Option<&mut Schur>,
+    schur: Option<&mut Schur>,
 ) -> Result<(), usize> {
     let (s_start, s_end) = (st.begin[s], st.begin[s + 1]);
     let s_pattern = st.pattern(s);
@@ -631,19 +631,11 @@ unsafe fn supernode(
     }
     let ls = MatMut::from_column_major_slice_mut(ls, s_nrows, s_ncols);
     let (mut top, mut bot) = ls.split_at_row_mut(s_ncols);
-    if let Some(w) = schur.as_deref_mut() {
-        // The trailing columns' block, updated by every column before the supernode: minus
-        // its Schur complement but for the supernode's own `kk` leading columns.
-        w.copy_block(top.rb());
-    }
-    let factored = faer::linalg::cholesky::ldlt::factor::cholesky_in_place(
-        top.rb_mut(),
-        Default::default(),
-        par,
-        MemStack::new(&mut work.mem),
-        Default::default(),
-    );
-    if let Err(faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index }) = factored {
+    let factored = match schur {
+        Some(w) => w.factorise_root(top.rb_mut(), par, MemStack::new(&mut work.mem)),
+        None => ldlt(top.rb_mut(), par, MemStack::new(&mut work.mem)),
+    };
+    if let Err(index) = factored {
         for &row in s_pattern {
             work.local[row] = usize::MAX;
         }
@@ -654,24 +646,36 @@ unsafe fn supernode(
             top[(i, j)] = 0.0;
         }
     }
-    faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place(
-        top.rb(),
-        bot.rb_mut().transpose_mut(),
-        par,
-    );
-    for j in 0..s_ncols {
-        let d = top[(j, j)].recip();
-        for i in 0..s_pattern.len() {
-            bot[(i, j)] *= d;
-        }
-    }
+    off_diagonal(top.rb(), bot.rb_mut(), par);
     for &row in s_pattern {
         work.local[row] = usize::MAX;
     }
-    if let Some(w) = schur {
-        w.eliminate_leading(top.rb(), par);
-    }
     Ok(())
+}
+
+/// faer's dense `L D Lᵀ` of `a` in place: `Err(column)` at a zero pivot.
+fn ldlt(a: MatMut<'_, f64>, par: Par, stack: &mut MemStack) -> Result<(), usize> {
+    use faer::linalg::cholesky::ldlt::factor::{LdltError, cholesky_in_place};
+    match cholesky_in_place(a, Default::default(), par, stack, Default::default()) {
+        Err(LdltError::ZeroPivot { index }) => Err(index),
+        Ok(_) => Ok(()),
+    }
+}
+
+/// The off-diagonal rows `bot` of a supernode whose diagonal block `top` is factorised (unit
+/// lower `L` with `D` on its diagonal, zeros above it): `bot L⁻ᵀ D⁻¹`.
+fn off_diagonal(top: faer::MatRef<'_, f64>, mut bot: MatMut<'_, f64>, par: Par) {
+    faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place(
+        top,
+        bot.rb_mut().transpose_mut(),
+        par,
+    );
+    for j in 0..top.ncols() {
+        let d = top[(j, j)].recip();
+        for i in 0..bot.nrows() {
+            bot[(i, j)] *= d;
+        }
+    }
 }
 
 /// The Schur complement `S` of the trailing columns `n..` of the matrix, taken from the last
@@ -684,43 +688,58 @@ struct Schur {
 }
 
 impl Schur {
-    /// `w = −A_MM` from the supernode's block `a` as its descendants left it (lower triangle,
-    /// in fresh memory written on rayon's threads).
-    fn copy_block(&mut self, a: faer::MatRef<'_, f64>) {
-        let kk = self.kk;
-        let m = a.nrows() - kk;
-        self.w = Some(crate::linsolve::mat_filled(m, m, true, |j, col| {
-            for i in j..m {
-                col[i] = -a[(kk + i, kk + j)];
-            }
-        }));
-    }
-
-    /// `w += L_MK D_K L_MKᵀ` from the factorised block `l` (unit lower `L` with `D` on its
-    /// diagonal): the elimination of the supernode's own leading `kk` columns.
-    fn eliminate_leading(&mut self, l: faer::MatRef<'_, f64>, par: Par) {
+    /// The root's dense `L D Lᵀ` in two stages, which leave the Schur complement of its
+    /// trailing constraint columns in between: its `kk` leading columns (the top separator's)
+    /// are factorised and eliminated from the trailing block (`A_MM −= L_MK D_K L_MKᵀ`, one rank
+    /// update on the lower triangle), `w = −A_MM` is copied, and the trailing block is
+    /// factorised. The same factor as one `L D Lᵀ` of the whole block within round-off, with the
+    /// rank update done once instead of again on a copy taken before it.
+    fn factorise_root(
+        &mut self,
+        a: MatMut<'_, f64>,
+        par: Par,
+        stack: &mut MemStack,
+    ) -> Result<(), usize> {
         use faer::linalg::matmul::triangular::{BlockStructure, matmul};
         let kk = self.kk;
-        let Some(w) = self.w.as_mut() else {
-            return;
-        };
-        if kk == 0 {
-            return;
+        let (mut a_kk, _, mut a_mk, mut a_mm) = a.split_at_mut(kk, kk);
+        if kk > 0 {
+            ldlt(a_kk.rb_mut(), par, stack)?;
+            for j in 0..kk {
+                for i in 0..j {
+                    a_kk[(i, j)] = 0.0;
+                }
+            }
+            off_diagonal(a_kk.rb(), a_mk.rb_mut(), par);
+            let m = a_mk.nrows();
+            // B = L_MK D_K: A_MM −= B L_MKᵀ.
+            let (l_kk, l_mk) = (a_kk.rb(), a_mk.rb());
+            let b = crate::linsolve::mat_filled(m, kk, true, |k, col| {
+                let d = l_kk[(k, k)];
+                for (i, x) in col.iter_mut().enumerate() {
+                    *x = l_mk[(i, k)] * d;
+                }
+            });
+            matmul(
+                a_mm.rb_mut(),
+                BlockStructure::TriangularLower,
+                faer::Accum::Add,
+                b.as_ref(),
+                BlockStructure::Rectangular,
+                a_mk.rb().transpose(),
+                BlockStructure::Rectangular,
+                -1.0,
+                par,
+            );
         }
-        let m = w.nrows();
-        let l_mk = l.get(kk.., ..kk);
-        let b = faer::Mat::<f64>::from_fn(m, kk, |i, k| l_mk[(i, k)] * l[(k, k)]);
-        matmul(
-            w.as_mut(),
-            BlockStructure::TriangularLower,
-            faer::Accum::Add,
-            b.as_ref(),
-            BlockStructure::Rectangular,
-            l_mk.transpose(),
-            BlockStructure::Rectangular,
-            1.0,
-            par,
-        );
+        let m = a_mm.nrows();
+        let view = a_mm.rb();
+        self.w = Some(crate::linsolve::mat_filled(m, m, true, |j, col| {
+            for i in j..m {
+                col[i] = -view[(i, j)];
+            }
+        }));
+        ldlt(a_mm, par, stack).map_err(|i| i + kk)
     }
 }
 
