@@ -15,7 +15,9 @@
 //!
 //! Printed (and written to `out/bench/scaling.md`, the table to `out/bench/scaling.csv`):
 //! * per level: DOFs, constraint rows, the phases of `summary.json` (`read`, `assemble`,
-//!   `analyse`, `factorise`, `condense` — the Delassus operator —, `solve` with its
+//!   `analyse`, `factorise` with its `constraint block` part (the dense Delassus operator
+//!   `W` and its `L D Lᵀ`, timed apart inside the factorisation), `condense` (`W` handed to
+//!   the contact model), `solve` with its
 //!   `contact Newton` part, `write` and `write_wait`), the process wall time, peak memory
 //!   and peak memory per DOF, the warm run's wall time;
 //! * the least-squares exponent of each phase against DOFs over `SCALING_FIT` (default L3–L7);
@@ -132,6 +134,11 @@ struct Row {
     /// Wall / floor of every cold run of the level (each against its own floor), in the order
     /// they ran: the spread the row's single ratio comes from.
     ratios: Vec<f64>,
+    /// `timings_s.constraint_block`: the part of `factorise` spent on the dense block of the
+    /// contact constraint rows (the Delassus operator `W` and its `L D Lᵀ`).
+    block: f64,
+    /// `factorise` and `constraint_block` of every cold run, in the order they ran.
+    factorise_runs: Vec<(f64, f64)>,
 }
 
 const CONTACT_PARTS: [&str; 5] = ["factorise", "columns", "direct", "woodbury", "products"];
@@ -205,6 +212,16 @@ fn main() {
                 (span > 0.0).then(|| wall / span)
             })
             .collect();
+        let factorise_runs: Vec<(f64, f64)> = colds
+            .iter()
+            .map(|(_, _, s)| {
+                let t = &s["timings_s"];
+                (
+                    t["factorise"].as_f64().unwrap_or(0.0),
+                    t["constraint_block"].as_f64().unwrap_or(0.0),
+                )
+            })
+            .collect();
         colds.sort_by(|a, b| a.1.total_cmp(&b.1));
         let (ok, wall, s) = colds.swap_remove(colds.len() / 2);
         let warm = cache.then(|| median(&mut warms));
@@ -229,6 +246,8 @@ fn main() {
             iterations: s["newton_iterations"].as_f64().unwrap_or(0.0),
             factorisations: s["lu_factorisations"].as_f64().unwrap_or(0.0),
             ratios,
+            block: t["constraint_block"].as_f64().unwrap_or(0.0),
+            factorise_runs,
             // A run that stops early (e.g. exit 5 at a local peak) still has its summary.
             status: match s["status"].as_str() {
                 Some(st) => st.chars().take(40).collect::<String>().replace(',', ";"),
@@ -243,10 +262,10 @@ fn main() {
     md += &format!(
         "Fig. 2 (`cases/fig2.json` as shipped, VTU every 10th step), {threads} threads. Times in s.\n\n"
     );
-    md += "| L | DOFs | constraint rows | read | assemble | analyse | factorise | condense | solve | contact Newton | write | write wait | wall | floor | floor phases summed | wall / floor | warm wall | warm / cold | peak MiB | KiB per DOF | status |\n";
-    md += &format!("|{}\n", "---|".repeat(22));
+    md += "| L | DOFs | constraint rows | read | assemble | analyse | factorise | of it: constraint block | condense | solve | contact Newton | write | write wait | wall | floor | floor phases summed | wall / floor | warm wall | warm / cold | peak MiB | KiB per DOF | status |\n";
+    md += &format!("|{}\n", "---|".repeat(23));
     let mut csv = String::from(
-        "level,dofs,constraints,read,assemble,analyse,factorise,condense,solve,write,write_wait,contact_newton,wall,warm_wall,peak_mib,status,build_span\n",
+        "level,dofs,constraints,read,assemble,analyse,factorise,condense,solve,write,write_wait,contact_newton,wall,warm_wall,peak_mib,status,build_span,constraint_block\n",
     );
     // The floor: the wall time the assembly, analysis and factorisation took together. The
     // assembly overlaps the analysis, so the sum of the three phases counts the overlap
@@ -258,7 +277,7 @@ fn main() {
         let warm = r.warm.map_or("—".into(), |w| format!("{w:.2}"));
         let ratio = r.warm.map_or("—".into(), |w| format!("{:.2}", w / r.wall));
         md += &format!(
-            "| {} | {:.0} | {:.0} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {:.0} | {:.2} | {} |\n",
+            "| {} | {:.0} | {:.0} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {:.0} | {:.2} | {} |\n",
             r.level,
             r.dofs,
             r.constraints,
@@ -266,6 +285,7 @@ fn main() {
             p[1],
             p[2],
             p[3],
+            r.block,
             p[4],
             p[5],
             r.contact,
@@ -282,7 +302,7 @@ fn main() {
             r.status
         );
         csv += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             r.level,
             r.dofs,
             r.constraints,
@@ -299,7 +319,8 @@ fn main() {
             r.warm.map_or(String::new(), |w| w.to_string()),
             r.peak,
             r.status,
-            r.span
+            r.span,
+            r.block
         );
     }
     md += "\nThe contact Newton's parts (s): Cholesky factorisations of the Delassus block `K`, the columns `K⁻¹ e_q` of the rows that differ from `K`, direct solves with the factor, the capacitance systems (Woodbury) and products with `W` for rows outside the system; `other` is the rest (the sets, the equations, the driver's work in the contact solve).\n\n| L | contact rows | Newton iterations | factorisations | contact Newton | factorise | columns | direct | woodbury | products | other |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -337,6 +358,17 @@ fn main() {
             )
         })
         .collect();
+    series.push((
+        "of factorise: constraint block",
+        fitted.iter().map(|r| (r.dofs, r.block)).collect(),
+    ));
+    series.push((
+        "of factorise: the rest",
+        fitted
+            .iter()
+            .map(|r| (r.dofs, r.phases[3] - r.block))
+            .collect(),
+    ));
     series.push((
         "contact Newton",
         fitted.iter().map(|r| (r.dofs, r.contact)).collect(),
@@ -405,8 +437,48 @@ fn main() {
                 r5.phases[3],
                 r7.phases[3] / r5.phases[3]
             );
+            // Every cold run's factorisation: the row's single ratio pairs two runs whose
+            // factorisations each move by a fifth on a shared machine.
+            let runs = |r: &Row| {
+                let mut f: Vec<f64> = r.factorise_runs.iter().map(|x| x.0).collect();
+                let list: Vec<String> = f.iter().map(|x| format!("{x:.3}")).collect();
+                (median(&mut f), list.join(", "))
+            };
+            let ((m7, l7), (m5, l5)) = (runs(r7), runs(r5));
+            md += &format!(
+                "  * every cold run's factorise: L7 {l7}; L5 {l5}; medians {m7:.3} / {m5:.3} = **{:.1}**\n",
+                m7 / m5
+            );
+            md += &format!(
+                "  * of it the constraint block (the dense Delassus operator `W`: its updates, the top separator's columns eliminated from it, its `L D Lᵀ`): L7 {:.3} s, L5 {:.3} s; the rest (the sparse factor of `K̂`, `Y`'s columns carried along) L7 / L5 = {:.2} / {:.2} = {:.1}\n",
+                r7.block,
+                r5.block,
+                r7.phases[3] - r7.block,
+                r5.phases[3] - r5.block,
+                (r7.phases[3] - r7.block) / (r5.phases[3] - r5.block)
+            );
         }
     }
+    // The contact block against the rest of the factorisation, level by level.
+    let over: Vec<String> = rows
+        .iter()
+        .filter(|r| r.block > 0.0 && r.block >= r.phases[3] - r.block)
+        .map(|r| format!("L{}", r.level))
+        .collect();
+    let shares: Vec<String> = rows
+        .iter()
+        .filter(|r| r.phases[3] > 0.0)
+        .map(|r| format!("L{} {:.0} %", r.level, 100.0 * r.block / r.phases[3]))
+        .collect();
+    md += &format!(
+        "* the contact block below the rest of the factorisation at every level: **{}** (its share of `factorise`: {})\n",
+        if over.is_empty() {
+            "yes".to_string()
+        } else {
+            format!("no, at {}", over.join(", "))
+        },
+        shares.join(", ")
+    );
     if !cache {
         md += "\n(This binary has no model cache: no warm runs.)\n";
     }

@@ -158,6 +158,15 @@ impl Condensed {
         })
     }
 
+    /// Wall time of the contact constraint block within the numeric factorisation, seconds
+    /// (zero where it was not timed apart: no contact, faer's loop, a factor from the cache).
+    pub fn constraint_block_s(&self) -> f64 {
+        match &self.chol {
+            Factor::Saddle(f) => f.constraint_block_s,
+            Factor::Partial(_) => 0.0,
+        }
+    }
+
     /// `Ŝ x` for a retained vector `x` (with the grounding springs).
     pub fn s_hat_mul(&self, x: &[f64]) -> Vec<f64> {
         let l = self.chol.l_rr();

@@ -478,6 +478,10 @@ pub struct SaddleFactor {
     /// `W = Y K̂⁻¹ Yᵀ` (its lower triangle) as the factorisation found it, the Schur
     /// complement of the constraint block, until [`Self::delassus`] takes it.
     schur: std::sync::Mutex<Option<faer::Mat<f64>>>,
+    /// Wall time of the constraint block within the numeric factorisation (its updates, the
+    /// elimination of the top separator's columns from it and its `L D Lᵀ`), seconds; zero
+    /// where it was not timed apart (faer's loop, a factor from the model cache).
+    pub constraint_block_s: f64,
 }
 
 /// The supernodal structure of a symbolic factorisation (forced supernodal at analysis).
@@ -812,8 +816,11 @@ impl SaddleSymbolic {
             Some(d) => FactorValues::Mapped(d.into_mapped()),
             None => FactorValues::Owned(owned),
         };
-        let f = self.from_values(std::sync::Arc::new(values))?;
-        *f.schur.lock().unwrap_or_else(|p| p.into_inner()) = schur;
+        let mut f = self.from_values(std::sync::Arc::new(values))?;
+        if let Some((w, seconds)) = schur {
+            f.constraint_block_s = seconds;
+            *f.schur.lock().unwrap_or_else(|p| p.into_inner()) = Some(w);
+        }
         let values = f.values();
         // K̂ must be positive definite: every pivot of its block positive (a body that nothing
         // holds gives a vanishing or negative one).
@@ -1340,6 +1347,7 @@ impl SaddleFactor {
             m,
             plan: std::sync::OnceLock::new(),
             schur: std::sync::Mutex::new(None),
+            constraint_block_s: 0.0,
         })
     }
 

@@ -421,7 +421,8 @@ impl Work {
 /// `Y K̂⁻¹ Yᵀ` for the saddle-point matrix of `K̂` and `Y`) where they all lie in the last
 /// supernode (the dense block of the constraint rows, as on every mesh of the ladder):
 /// that block as its descendants left it, less the elimination of the supernode's own
-/// columns before `n` (a rank update instead of the product `L_MM D_MM L_MMᵀ`).
+/// columns before `n` (a rank update instead of the product `L_MM D_MM L_MMᵀ`), with the
+/// wall time of that block (its updates, the elimination and its `L D Lᵀ`, in seconds).
 ///
 /// # Panics
 /// Where [`available`] is false.
@@ -431,7 +432,7 @@ pub fn factorise(
     l: &mut [f64],
     par: Par,
     schur_from: Option<usize>,
-) -> Result<Option<faer::Mat<f64>>, usize> {
+) -> Result<Option<(faer::Mat<f64>, f64)>, usize> {
     use rayon::prelude::*;
     assert!(
         available(),
@@ -460,6 +461,7 @@ pub fn factorise(
             s,
             kk: n - st.begin[s],
             w: None,
+            seconds: 0.0,
         });
     // One set of working arrays per thread that runs a subtree (the row map alone is 8 bytes
     // per row), made on its first subtree.
@@ -548,7 +550,7 @@ pub fn factorise(
             )?
         };
     }
-    Ok(schur.and_then(|w| w.w))
+    Ok(schur.and_then(|w| w.w.map(|m| (m, w.seconds))))
 }
 
 /// Factorises supernode `s`: its columns of `a`, the updates of its descendants in ascending
@@ -583,11 +585,6 @@ unsafe fn supernode(
         scatter(st, a, s, &work.local, ls);
     }
     let desc = schedule.descendants(s);
-    let chunks = if split && s_ncols >= SPLIT_COLUMNS {
-        column_chunks(s_ncols, s_nrows, 4 * rayon::current_num_threads().max(1))
-    } else {
-        vec![(0, s_ncols)]
-    };
     let ls_ptr = Values {
         ptr: ls.as_mut_ptr(),
         len: ls.len(),
@@ -614,26 +611,62 @@ unsafe fn supernode(
             };
         }
     };
-    if chunks.len() > 1 {
-        use rayon::prelude::*;
-        let local = &work.local;
-        chunks.par_iter().for_each_init(
-            || (Vec::new(), Vec::new()),
-            |(row_idx, col_idx), &range| columns(range, local, row_idx, col_idx),
-        );
-    } else {
-        columns(
-            (0, s_ncols),
-            &work.local,
-            &mut work.row_idx,
-            &mut work.col_idx,
-        );
-    }
-    let ls = MatMut::from_column_major_slice_mut(ls, s_nrows, s_ncols);
-    let (mut top, mut bot) = ls.split_at_row_mut(s_ncols);
+    // The updates of the columns `c0..c1`, with `split` on rayon's threads in ranges of
+    // about equal area (each element still takes its updates in the same order).
+    let updates = |(c0, c1): (usize, usize), work: &mut Work| {
+        if c0 == c1 {
+            return;
+        }
+        let chunks: Vec<(usize, usize)> = if split && c1 - c0 >= SPLIT_COLUMNS {
+            column_chunks(
+                c1 - c0,
+                s_nrows - c0,
+                4 * rayon::current_num_threads().max(1),
+            )
+            .into_iter()
+            .map(|(a, b)| (a + c0, b + c0))
+            .collect()
+        } else {
+            vec![(c0, c1)]
+        };
+        if chunks.len() > 1 {
+            use rayon::prelude::*;
+            let local = &work.local;
+            chunks.par_iter().for_each_init(
+                || (Vec::new(), Vec::new()),
+                |(row_idx, col_idx), &range| columns(range, local, row_idx, col_idx),
+            );
+        } else {
+            columns((c0, c1), &work.local, &mut work.row_idx, &mut work.col_idx);
+        }
+    };
+    // SAFETY (each `block`): the updates are finished when it is called.
+    let block = || {
+        let ls = unsafe { ls_ptr.get_mut(0..ls_ptr.len) };
+        MatMut::from_column_major_slice_mut(ls, s_nrows, s_ncols)
+    };
     let factored = match schur {
-        Some(w) => w.factorise_root(top.rb_mut(), par, MemStack::new(&mut work.mem)),
-        None => ldlt(top.rb_mut(), par, MemStack::new(&mut work.mem)),
+        None => {
+            updates((0, s_ncols), work);
+            ldlt(
+                block().split_at_row_mut(s_ncols).0,
+                par,
+                MemStack::new(&mut work.mem),
+            )
+        }
+        Some(w) => {
+            // The root: its separator columns first (they need only their own updates), then
+            // the constraint block, timed apart.
+            updates((0, w.kk), work);
+            w.factorise_leading(block(), par, MemStack::new(&mut work.mem))
+                .and_then(|()| {
+                    let t = std::time::Instant::now();
+                    updates((w.kk, s_ncols), work);
+                    let r = w.factorise_block(block(), par, MemStack::new(&mut work.mem));
+                    w.seconds = t.elapsed().as_secs_f64();
+                    r
+                })
+        }
     };
     if let Err(index) = factored {
         for &row in s_pattern {
@@ -641,6 +674,7 @@ unsafe fn supernode(
         }
         return Err(index + s_start);
     }
+    let (mut top, mut bot) = block().split_at_row_mut(s_ncols);
     for j in 0..s_ncols {
         for i in 0..j {
             top[(i, j)] = 0.0;
@@ -685,16 +719,42 @@ struct Schur {
     s: usize,
     kk: usize,
     w: Option<faer::Mat<f64>>,
+    /// Wall time of the constraint block: the updates of its columns, the elimination of the
+    /// leading columns from it and its `L D Lᵀ`.
+    seconds: f64,
 }
 
 impl Schur {
-    /// The root's dense `L D Lᵀ` in two stages, which leave the Schur complement of its
-    /// trailing constraint columns in between: its `kk` leading columns (the top separator's)
-    /// are factorised and eliminated from the trailing block (`A_MM −= L_MK D_K L_MKᵀ`, one rank
-    /// update on the lower triangle), `w = −A_MM` is copied, and the trailing block is
-    /// factorised. The same factor as one `L D Lᵀ` of the whole block within round-off, with the
-    /// rank update done once instead of again on a copy taken before it.
-    fn factorise_root(
+    /// The first stage of the root's dense `L D Lᵀ`, once the updates of its `kk` leading
+    /// columns (the top separator's) are in: those columns factorised, with the rows of the
+    /// constraint block below them (`L_MK`).
+    fn factorise_leading(
+        &mut self,
+        a: MatMut<'_, f64>,
+        par: Par,
+        stack: &mut MemStack,
+    ) -> Result<(), usize> {
+        let kk = self.kk;
+        if kk == 0 {
+            return Ok(());
+        }
+        let (mut a_kk, _, a_mk, _) = a.split_at_mut(kk, kk);
+        ldlt(a_kk.rb_mut(), par, stack)?;
+        for j in 0..kk {
+            for i in 0..j {
+                a_kk[(i, j)] = 0.0;
+            }
+        }
+        off_diagonal(a_kk.rb(), a_mk, par);
+        Ok(())
+    }
+
+    /// The second stage, once the updates of the constraint columns are in: the leading
+    /// columns eliminated from the constraint block (`A_MM −= L_MK D_K L_MKᵀ`, one rank update
+    /// on the lower triangle), `w = −A_MM` copied, and the block factorised. The same factor
+    /// as one `L D Lᵀ` of the whole root within round-off, with the rank update done once
+    /// instead of again on a copy of the block taken before it.
+    fn factorise_block(
         &mut self,
         a: MatMut<'_, f64>,
         par: Par,
@@ -702,18 +762,11 @@ impl Schur {
     ) -> Result<(), usize> {
         use faer::linalg::matmul::triangular::{BlockStructure, matmul};
         let kk = self.kk;
-        let (mut a_kk, _, mut a_mk, mut a_mm) = a.split_at_mut(kk, kk);
+        let (a_kk, _, a_mk, mut a_mm) = a.split_at_mut(kk, kk);
         if kk > 0 {
-            ldlt(a_kk.rb_mut(), par, stack)?;
-            for j in 0..kk {
-                for i in 0..j {
-                    a_kk[(i, j)] = 0.0;
-                }
-            }
-            off_diagonal(a_kk.rb(), a_mk.rb_mut(), par);
             let m = a_mk.nrows();
-            // B = L_MK D_K: A_MM −= B L_MKᵀ.
             let (l_kk, l_mk) = (a_kk.rb(), a_mk.rb());
+            // B = L_MK D_K: A_MM −= B L_MKᵀ.
             let b = crate::linsolve::mat_filled(m, kk, true, |k, col| {
                 let d = l_kk[(k, k)];
                 for (i, x) in col.iter_mut().enumerate() {
@@ -726,7 +779,7 @@ impl Schur {
                 faer::Accum::Add,
                 b.as_ref(),
                 BlockStructure::Rectangular,
-                a_mk.rb().transpose(),
+                l_mk.transpose(),
                 BlockStructure::Rectangular,
                 -1.0,
                 par,

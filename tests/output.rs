@@ -77,6 +77,12 @@ fn vtu_holds_every_documented_array_with_finite_values() {
             && span >= assemble.max(analyse) + factorise - 1e-6,
         "build_span {span} against assemble {assemble}, analyse {analyse}, factorise {factorise}"
     );
+    // The dense block of the constraint rows is a part of the factorisation, timed inside it.
+    let block = t("constraint_block");
+    assert!(
+        block <= factorise,
+        "constraint_block {block} exceeds factorise {factorise}"
+    );
     let phases = [
         "read",
         "pair",

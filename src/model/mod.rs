@@ -54,6 +54,11 @@ pub struct Timings {
     pub analyse: f64,
     /// Numeric Cholesky factorisation.
     pub factorise: f64,
+    /// Part of `factorise`: the dense block of the contact constraint rows, the Delassus
+    /// operator `W = Y K̂⁻¹ Yᵀ` (the updates of its columns, the elimination of the top
+    /// separator's columns from it, and its `L D Lᵀ`); the rest of `factorise` is the sparse
+    /// factor of `K̂`, with `Y`'s columns carried along. Zero where it is not timed apart.
+    pub constraint_block: f64,
     /// Wall time from the start of the assembly to the end of the numeric factorisation
     /// (zero on a model-cache hit): the values are assembled alongside the analysis, so this
     /// is less than `assemble + analyse + factorise`.
@@ -752,6 +757,7 @@ fn factorise(
             };
             let condensed = Condensed::build_saddle(k, n_i, grounded, &y_free, &symbolic, dest)?;
             timings.factorise = t.elapsed().as_secs_f64();
+            timings.constraint_block = condensed.constraint_block_s();
             // The stiffness is in the factor now, and a contact model's cache entry does not
             // keep its pattern: freed before the Delassus operator's three dense m × m arrays
             // are allocated, which is when a run's memory peaks (L7: K's 0.11 GB of 1.5 GB).
