@@ -23,7 +23,8 @@ SERIES = [
     ("assemble", "assemble", dict(color="tab:green", marker="s")),
     ("analyse", "analyse", dict(color="tab:olive", marker="v")),
     ("factorise", "factorise", dict(color="tab:red", marker="o")),
-    ("condense", "condense (Delassus W)", dict(color="tab:purple", marker="D")),
+    ("constraint_block", "of factorise: constraint block (dense W and its LDLᵀ)", dict(color="tab:pink", marker="d")),
+    ("condense", "condense (W handed over)", dict(color="tab:purple", marker="D")),
     ("contact_newton", "contact Newton", dict(color="tab:orange", marker="^")),
     ("write", "write (background)", dict(color="tab:gray", marker="x")),
     ("floor", "floor = assemble + analyse + factorise (as they ran, overlapped)", dict(color="black", ls="--", marker="")),
@@ -48,7 +49,7 @@ def main():
     fit = np.array([lo <= lv <= hi for lv in levels])
     fig, ax = plt.subplots(figsize=(8, 6))
     for key, label, style in SERIES:
-        y = np.array([float(r[key]) for r in rows])
+        y = np.array([float(r.get(key) or 0.0) for r in rows])
         ok = y > 0
         if not ok.any():
             continue

@@ -17,10 +17,14 @@
 //! synchronisation of each of them cost more than it gained (the 2-thread numeric
 //! factorisation at L5 was no faster than the 1-thread one, with ~180 000 futex calls at L7).
 //!
-//! The values are those of faer's loop with sequential kernels, bit for bit
-//! (`linsolve::tests::the_tree_scheduled_factor_is_faers_below_the_root_bit_for_bit`), and do not depend on the number of threads:
-//! the partition into subtrees is fixed by the tree alone, and every update is a sequential
-//! kernel call on its own columns.
+//! The values are those of faer's loop with sequential kernels, bit for bit, in every supernode
+//! but the root; where the root holds the constraint block (a saddle-point matrix), it is
+//! factorised in two stages (the top separator's columns, then the block, with `W` copied in
+//! between), which is faer's one dense `L D Lᵀ` within round-off
+//! (`linsolve::tests::the_tree_scheduled_factor_is_faers_below_the_root_bit_for_bit`). The
+//! values do not depend on the number of threads: the partition into subtrees is fixed by the
+//! tree alone, every update is a sequential kernel call on its own columns, and the dense
+//! kernels split their work without changing any sum's order.
 //!
 //! Only on x86-64 with AVX2 and FMA, where faer's gather-scatter update kernel (the
 //! `private-gemm-x86` crate, pinned to faer's version) is what faer itself runs
