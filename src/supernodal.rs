@@ -742,13 +742,9 @@ impl Schur {
         if kk == 0 {
             return Ok(());
         }
+        // The solve reads the unit lower triangle only; `supernode` clears the upper one.
         let (mut a_kk, _, a_mk, _) = a.split_at_mut(kk, kk);
         ldlt(a_kk.rb_mut(), par, stack)?;
-        for j in 0..kk {
-            for i in 0..j {
-                a_kk[(i, j)] = 0.0;
-            }
-        }
         off_diagonal(a_kk.rb(), a_mk, par);
         Ok(())
     }
