@@ -20,14 +20,19 @@
 //!   the contact model), `solve` with its
 //!   `contact Newton` part, `write` and `write_wait`), the process wall time, peak memory
 //!   and peak memory per DOF, the warm run's wall time;
-//! * the least-squares exponent of each phase against DOFs over `SCALING_FIT` (default L3–L7);
+//! * the modelled operations of the numeric factorisation (`factor_flops` of the summary, from
+//!   the symbolic analysis: `K̂` itself, the coupling the constraint rows add, the constraint
+//!   block), which do not depend on the machine, and the measured `factorise` per operation;
+//! * the least-squares exponent of each phase (and of each part of the modelled operations)
+//!   against DOFs over `SCALING_FIT` (default L3–L7);
 //! * the contact Newton's parts per level (`contact_phases_s` of `summary.json`: Cholesky
 //!   factorisations of the Delassus block, the columns `K⁻¹ e_q` of slip rows, direct solves,
 //!   the capacitance systems and products with `W`), with its iterations and factorisations;
 //! * the ratios: wall / floor of the shipped case on L5 (floor = assemble + analyse +
 //!   factorise as they ran: `build_span` of the summary, since the assembly runs alongside
 //!   the analysis; the ratio to the three phases summed is printed too), warm / cold wall on
-//!   L5, wall / floor on L7, factorise L7 / L5; for L5 and L7 also the ratio of every cold
+//!   L5, wall / floor on L7, factorise L7 / L5 (and the modelled operations' L7 / L5, the
+//!   time ratio the same speed per operation would give); for L5 and L7 also the ratio of every cold
 //!   run against its own floor (the row's ratio is the median-wall run's, and the floor
 //!   itself moves by a tenth between runs on a shared machine).
 //!
@@ -139,6 +144,9 @@ struct Row {
     block: f64,
     /// `factorise` and `constraint_block` of every cold run, in the order they ran.
     factorise_runs: Vec<(f64, f64)>,
+    /// `factor_flops` of the summary: the modelled operations of the numeric factorisation
+    /// (`K̂`, the coupling the constraint rows add, the constraint block), zeros if none.
+    flops: [f64; 3],
 }
 
 const CONTACT_PARTS: [&str; 5] = ["factorise", "columns", "direct", "woodbury", "products"];
@@ -248,6 +256,8 @@ fn main() {
             ratios,
             block: t["constraint_block"].as_f64().unwrap_or(0.0),
             factorise_runs,
+            flops: ["k", "coupling", "constraint_block"]
+                .map(|k| s["factor_flops"][k].as_f64().unwrap_or(0.0)),
             // A run that stops early (e.g. exit 5 at a local peak) still has its summary.
             status: match s["status"].as_str() {
                 Some(st) => st.chars().take(40).collect::<String>().replace(',', ";"),
@@ -265,7 +275,7 @@ fn main() {
     md += "| L | DOFs | constraint rows | read | assemble | analyse | factorise | of it: constraint block | condense | solve | contact Newton | write | write wait | wall | floor | floor phases summed | wall / floor | warm wall | warm / cold | peak MiB | KiB per DOF | status |\n";
     md += &format!("|{}\n", "---|".repeat(23));
     let mut csv = String::from(
-        "level,dofs,constraints,read,assemble,analyse,factorise,condense,solve,write,write_wait,contact_newton,wall,warm_wall,peak_mib,status,build_span,constraint_block\n",
+        "level,dofs,constraints,read,assemble,analyse,factorise,condense,solve,write,write_wait,contact_newton,wall,warm_wall,peak_mib,status,build_span,constraint_block,flops_k,flops_coupling,flops_block\n",
     );
     // The floor: the wall time the assembly, analysis and factorisation took together. The
     // assembly overlaps the analysis, so the sum of the three phases counts the overlap
@@ -302,7 +312,7 @@ fn main() {
             r.status
         );
         csv += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             r.level,
             r.dofs,
             r.constraints,
@@ -320,7 +330,28 @@ fn main() {
             r.peak,
             r.status,
             r.span,
-            r.block
+            r.block,
+            r.flops[0],
+            r.flops[1],
+            r.flops[2]
+        );
+    }
+    // The modelled operations: what each level's factorisation has to do, whatever the
+    // machine's speed on the day.
+    md += "\nModelled operations of the numeric factorisation (`factor_flops` of the summary, from the symbolic analysis: `K̂` itself, the coupling the constraint rows add to its elimination (their rows below every separator they reach and the updates they carry up), the constraint block's own `L D Lᵀ`), and the measured `factorise` per modelled operation.\n\n| L | DOFs | constraint rows | K̂ | coupling | constraint block | total | factorise s | Gflop/s |\n|---|---|---|---|---|---|---|---|---|\n";
+    for r in rows.iter().filter(|r| r.flops.iter().sum::<f64>() > 0.0) {
+        let total: f64 = r.flops.iter().sum();
+        md += &format!(
+            "| {} | {:.0} | {:.0} | {:.2e} | {:.2e} | {:.2e} | {:.2e} | {:.3} | {:.1} |\n",
+            r.level,
+            r.dofs,
+            r.constraints,
+            r.flops[0],
+            r.flops[1],
+            r.flops[2],
+            total,
+            r.phases[3],
+            total / r.phases[3] / 1e9
         );
     }
     md += "\nThe contact Newton's parts (s): Cholesky factorisations of the Delassus block `K`, the columns `K⁻¹ e_q` of the rows that differ from `K`, direct solves with the factor, the capacitance systems (Woodbury) and products with `W` for rows outside the system; `other` is the rest (the sets, the equations, the driver's work in the contact solve).\n\n| L | contact rows | Newton iterations | factorisations | contact Newton | factorise | columns | direct | woodbury | products | other |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -369,6 +400,16 @@ fn main() {
             .map(|r| (r.dofs, r.phases[3] - r.block))
             .collect(),
     ));
+    for k in 0..3 {
+        series.push((
+            match k {
+                0 => "modelled operations: K̂",
+                1 => "modelled operations: coupling",
+                _ => "modelled operations: constraint block",
+            },
+            fitted.iter().map(|r| (r.dofs, r.flops[k])).collect(),
+        ));
+    }
     series.push((
         "contact Newton",
         fitted.iter().map(|r| (r.dofs, r.contact)).collect(),
@@ -457,6 +498,20 @@ fn main() {
                 r5.phases[3] - r5.block,
                 (r7.phases[3] - r7.block) / (r5.phases[3] - r5.block)
             );
+            let (f7, f5) = (r7.flops, r5.flops);
+            let (t7, t5): (f64, f64) = (f7.iter().sum(), f5.iter().sum());
+            if t7 > 0.0 && t5 > 0.0 {
+                md += &format!(
+                    "  * modelled operations L7 / L5 (independent of the machine): **{:.1}** in all — `K̂` {:.1}, the coupling {:.1}, the constraint block {:.0}; the coupling and the block alone at L7 are {:.1} × L5's whole factorisation, so at the same speed per operation the time ratio would be {:.1}; L7 ran {:.2} × as many operations per second as L5\n",
+                    t7 / t5,
+                    f7[0] / f5[0],
+                    f7[1] / f5[1],
+                    f7[2] / f5[2],
+                    (f7[1] + f7[2]) / t5,
+                    t7 / t5,
+                    (t7 / r7.phases[3]) / (t5 / r5.phases[3])
+                );
+            }
         }
     }
     // The contact block against the rest of the factorisation, level by level.

@@ -1690,6 +1690,81 @@ mod tests {
         assert!(after.is_err(), "a solve after the release panics");
     }
 
+    /// On a fully dense saddle-point matrix (one supernode of `n + m` columns) the modelled
+    /// operations are the dense `L D Lᵀ`'s `(n + m)³ / 3`, split as `n³ / 3` for `K̂`,
+    /// `n² m + n m²` for the coupling and `m³ / 3` for the constraint block; without
+    /// constraint rows only the first is left.
+    #[test]
+    fn the_modelled_operations_of_a_dense_saddle_point_matrix_are_the_dense_count() {
+        let n = 7;
+        let (mut col_ptr, mut row_idx) = (vec![0], Vec::new());
+        for j in 0..n {
+            row_idx.extend(0..=j);
+            col_ptr.push(row_idx.len());
+        }
+        for m in [0usize, 3] {
+            let y: Rows = (0..m)
+                .map(|k| (0..n).map(|r| (r, 1.0 + (r * k) as f64)).collect())
+                .collect();
+            let sym = SaddleSymbolic::analyse(n, &col_ptr, &row_idx, &y).unwrap();
+            let (k, coupling, block) = sym.flops();
+            let (nf, mf) = (n as f64, m as f64);
+            let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
+            assert!(close(k, nf.powi(3) / 3.0), "m = {m}: K̂ {k}");
+            assert!(
+                close(coupling, nf * nf * mf + nf * mf * mf),
+                "m = {m}: {coupling}"
+            );
+            assert!(close(block, mf.powi(3) / 3.0), "m = {m}: block {block}");
+            assert!(close(k + coupling + block, (nf + mf).powi(3) / 3.0));
+        }
+    }
+
+    /// Two blocks of `w` unknowns joined only through a separator of `s` (in that order), and
+    /// `m` constraint rows on the first block and the separator: the supernodes are the two
+    /// blocks (the first with the separator's and the constraints' rows below it, the second
+    /// with the separator's only) and the root (the separator with the constraint columns),
+    /// and the modelled operations are those three fronts' counts.
+    #[test]
+    fn the_modelled_operations_follow_the_rows_below_each_supernode() {
+        let (w, sep, m) = (24usize, 8usize, 6usize);
+        let n = 2 * w + sep;
+        let (mut col_ptr, mut row_idx) = (vec![0], Vec::new());
+        for j in 0..n {
+            let block_start = if j < w {
+                0
+            } else if j < 2 * w {
+                w
+            } else {
+                0
+            };
+            row_idx.extend(block_start..=j);
+            col_ptr.push(row_idx.len());
+        }
+        let y: Rows = (0..m)
+            .map(|k| vec![(0, 1.0), (1, 0.5), (2 * w + k, 1.0)])
+            .collect();
+        let identity: Vec<usize> = (0..n).collect();
+        let sym = SaddleSymbolic::with_ordering(n, &col_ptr, &row_idx, &y, &identity).unwrap();
+        let (k, coupling, block) = sym.flops();
+        // The partition the counts below assume (blocks large enough that the supernodes are
+        // not amalgamated).
+        let sn = supernodal(&sym.inner).unwrap();
+        assert_eq!(sn.supernode_begin(), &[0, w, 2 * w][..]);
+        assert_eq!(sn.supernode_end(), &[w, 2 * w, n + m][..]);
+        let (wf, sf, mf) = (w as f64, sep as f64, m as f64);
+        let own = wf.powi(3) / 3.0 + wf * wf * sf + wf * sf * sf;
+        let k_ref = 2.0 * own + sf.powi(3) / 3.0;
+        let coupling_ref = wf * wf * mf + wf * mf * (mf + 2.0 * sf) + sf * sf * mf + sf * mf * mf;
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();
+        assert!(close(k, k_ref), "K̂ {k} against {k_ref}");
+        assert!(
+            close(coupling, coupling_ref),
+            "coupling {coupling} against {coupling_ref}"
+        );
+        assert!(close(block, mf.powi(3) / 3.0), "block {block}");
+    }
+
     #[test]
     fn the_constraint_block_gives_the_delassus_operator_and_its_cholesky_factor() {
         let n = 40;

@@ -95,6 +95,9 @@ pub struct Summary {
     pub lu_factorisations: usize,
     pub gmres_iterations: usize,
     pub peak_memory_mib: Option<f64>,
+    /// The numeric factorisation's modelled operations (null where this run did not analyse
+    /// a contact model: a model-cache hit, or no contact).
+    pub factor_flops: Option<crate::model::FactorFlops>,
     pub friction: Option<FrictionSummary>,
     /// Self-checks of the last converged step (see [`crate::checks`]).
     pub checks: Vec<crate::checks::Check>,
@@ -450,6 +453,7 @@ pub fn summarise(
         lu_factorisations,
         gmres_iterations,
         peak_memory_mib: crate::output::peak_memory_bytes().map(|b| b as f64 / (1024.0 * 1024.0)),
+        factor_flops: model.factor_flops,
         friction,
         checks,
         steps: records,

@@ -9,7 +9,8 @@ use common::{mesh_path, shipped_case, stickslip, tempdir, validation_row};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
-const TIMING_KEYS: [&str; 9] = [
+const TIMING_KEYS: [&str; 10] = [
+    "factor_flops",
     "cache",
     "timings_s",
     "contact_solve_s",

@@ -76,6 +76,29 @@ pub struct Timings {
     pub cache: f64,
 }
 
+/// The modelled floating-point operations of a contact model's numeric factorisation, from its
+/// symbolic analysis ([`crate::linsolve::SaddleSymbolic::flops`]): a count that does not depend
+/// on the machine, beside the measured `factorise` time.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct FactorFlops {
+    /// The elimination of `K̂` itself: each supernode's own block, its solve and its updates
+    /// of the rows of `K̂`.
+    pub k: f64,
+    /// What the constraint rows add to the elimination of `K̂`: the rows of `Y` that fill in
+    /// below every separator they reach (`L_MK`) and the updates they carry up to the
+    /// constraint block.
+    pub coupling: f64,
+    /// The constraint block's own `L D Lᵀ`: the dense Delassus operator's columns.
+    pub constraint_block: f64,
+}
+
+impl FactorFlops {
+    /// All three.
+    pub fn total(&self) -> f64 {
+        self.k + self.coupling + self.constraint_block
+    }
+}
+
 /// The assembled model.
 pub struct Model {
     pub mesh: Mesh,
@@ -87,6 +110,9 @@ pub struct Model {
     /// Nonzeros of the upper triangle of the assembled stiffness (`K` itself is not kept: it
     /// is factorised, and a model from the cache is not assembled at all).
     pub stiffness_nonzeros: usize,
+    /// The factorisation's modelled operations ([`FactorFlops`]): a contact model analysed in
+    /// this run (`None` on a model-cache hit, which skips the analysis, and without contact).
+    pub factor_flops: Option<FactorFlops>,
     /// Factorised stiffness and condensed system on the retained DOFs.
     pub condensed: Condensed,
     /// Nodal forces of the tractions at scale 1 (free DOFs).
@@ -310,6 +336,7 @@ impl Model {
         timings.cache = t.elapsed().as_secs_f64() - analyse_s;
         let mut cache_report = lookup.report();
 
+        let mut factor_flops = None;
         let (condensed, contact, f_prescribed, stiffness_nonzeros, w0_cached, pending) =
             match lookup {
                 cached::Lookup::Hit(r) => {
@@ -371,6 +398,14 @@ impl Model {
                     k.values = values;
                     let t_joined = t_join.elapsed().as_secs_f64();
                     let (symbolic, t_analyse) = analysed;
+                    if let Ok(Analysis::Saddle(s, _)) = &symbolic {
+                        let (k, coupling, constraint_block) = s.flops();
+                        factor_flops = Some(FactorFlops {
+                            k,
+                            coupling,
+                            constraint_block,
+                        });
+                    }
                     timings.assemble = t_pattern + t_values + t_traction;
                     timings.analyse = t_analyse;
                     let nnz = k.row_idx.len();
@@ -462,6 +497,7 @@ impl Model {
             elem_body,
             dofs,
             stiffness_nonzeros,
+            factor_flops,
             condensed,
             f_traction,
             f_prescribed,
