@@ -36,6 +36,8 @@
 //!   run against its own floor (the row's ratio is the median-wall run's, and the floor
 //!   itself moves by a tenth between runs on a shared machine).
 //!
+//! * a PASS or FAIL line per target of the issue, for this run.
+//!
 //! Run: `cargo bench --bench scaling`. Environment: `STICKSLIP_THREADS` (default 2),
 //! `SCALING_LEVELS` (default `0-7`, or a list `4,5,7`), `SCALING_FIT` (default `3-7`),
 //! `SCALING_REPEAT` (default 3).
@@ -536,6 +538,34 @@ fn main() {
     );
     if !cache {
         md += "\n(This binary has no model cache: no warm runs.)\n";
+    }
+    // One line per target of the issue, as in the sweep bench: what this run shows.
+    let mut verdicts = Vec::new();
+    let mut verdict = |name: &str, value: f64, limit: f64| {
+        let pass = value <= limit;
+        verdicts.push(format!(
+            "{}: {name} {value:.2} (target ≤ {limit})",
+            if pass { "PASS" } else { "FAIL" }
+        ));
+    };
+    if let Some(r5) = at(5) {
+        verdict("Fig. 2 on L5, wall / floor", r5.wall / floor(r5), 1.3);
+        if let Some(w) = r5.warm {
+            verdict("Fig. 2 on L5, second run / first", w / r5.wall, 0.35);
+        }
+    }
+    if let Some(r7) = at(7) {
+        verdict("Fig. 2 on L7, wall / floor", r7.wall / floor(r7), 1.5);
+        if let Some(r5) = at(5) {
+            verdict("factorise L7 / L5", r7.phases[3] / r5.phases[3], 6.0);
+        }
+    }
+    if !verdicts.is_empty() {
+        md += &format!("\n{}\n", verdicts.join("\n"));
+        md += &format!(
+            "{}: the contact block below the rest of the factorisation at every level\n",
+            if over.is_empty() { "PASS" } else { "FAIL" }
+        );
     }
     println!("{md}");
     std::fs::write(root.join("out/bench/scaling.md"), &md).unwrap();

@@ -8,7 +8,10 @@ Reads the CSV written by `cargo bench --bench scaling` (one row per level) and d
 of `summary.json` (assemble, analyse, factorise, condense = the Delassus operator, the contact
 Newton part of solve, write, write wait), the floor (assemble + analyse + factorise) and the
 process wall time, each labelled with its least-squares exponent over the levels given by
---fit (default 3-7), with N^1 and N^1.5 guide slopes.
+--fit (default 3-7), with N^1 and N^1.5 guide slopes. Where the CSV has them (from the
+twenty-second session on), a second panel draws the factorisation's modelled operations
+(`factor_flops` of the summary: K̂ itself, the coupling the constraint rows add, the constraint
+block) with their exponents: counts, not times, the same on every machine.
 """
 import argparse
 import csv
@@ -47,7 +50,14 @@ def main():
     n = np.array([float(r["dofs"]) for r in rows])
     levels = [int(r["level"]) for r in rows]
     fit = np.array([lo <= lv <= hi for lv in levels])
-    fig, ax = plt.subplots(figsize=(8, 6))
+    flops = [("flops_k", "K̂ itself", dict(color="tab:blue", marker="o")),
+             ("flops_coupling", "coupling the constraint rows add", dict(color="tab:red", marker="s")),
+             ("flops_block", "constraint block (dense LDLᵀ of W)", dict(color="tab:pink", marker="d"))]
+    has_flops = any(float(r.get("flops_k") or 0.0) > 0 for r in rows)
+    if has_flops:
+        fig, (ax, bx) = plt.subplots(1, 2, figsize=(14, 6))
+    else:
+        fig, ax = plt.subplots(figsize=(8, 6))
     for key, label, style in SERIES:
         y = np.array([float(r.get(key) or 0.0) for r in rows])
         ok = y > 0
@@ -69,6 +79,24 @@ def main():
     ax.set_title(f"Fig. 2 run by phase against DOFs (exponents fitted over L{lo}–L{hi})")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
+    if has_flops:
+        for key, label, style in flops:
+            y = np.array([float(r.get(key) or 0.0) for r in rows])
+            ok = y > 0
+            sel = fit & ok
+            e = np.polyfit(np.log(n[sel]), np.log(y[sel]), 1)[0] if sel.sum() >= 2 else float("nan")
+            bx.loglog(n[ok], y[ok], label=f"{label}  (N^{e:.2f})", **style)
+        y5 = [float(r["flops_k"]) for r in rows if r["level"] == "5"]
+        if y5:
+            n5 = n[levels.index(5)]
+            for p, ls in [(1.5, "-."), (3.0, ":")]:
+                bx.loglog([x0, x1], [y5[0] * (x0 / n5) ** p, y5[0] * (x1 / n5) ** p],
+                          color="lightgray", ls=ls, lw=1, label=f"slope {p:g}")
+        bx.set_xlabel("free DOFs N")
+        bx.set_ylabel("modelled operations")
+        bx.set_title("The factorisation's modelled operations (machine-independent)")
+        bx.grid(True, which="both", alpha=0.3)
+        bx.legend(fontsize=8, loc="upper left")
     fig.tight_layout()
     fig.savefig(a.png, dpi=120)
     print(f"wrote {a.png}")
