@@ -227,6 +227,22 @@ pub fn end_summary(case_path: &Path, s: &Summary, out_dir: &Path, stem: &str) ->
         s.peak_memory_mib
             .map_or("unknown".into(), |m| format!("{m:.0} MiB"))
     );
+    if let Some(f) = &s.factor_flops {
+        // What the factorisation had to do, whatever the machine: where a finer mesh's time
+        // goes (the constraint rows' part grows fastest along a ladder that refines the contact).
+        o += &format!(
+            "  factor    {:.2e} modelled operations ({:.0} % K̂, {:.0} % the constraint rows' coupling, {:.0} % their dense block){}\n",
+            f.total(),
+            100.0 * f.k / f.total(),
+            100.0 * f.coupling / f.total(),
+            100.0 * f.constraint_block / f.total(),
+            if t.factorise > 0.0 {
+                format!(", {:.1} Gflop/s", f.total() / t.factorise / 1e9)
+            } else {
+                String::new()
+            }
+        );
+    }
     o += &format!(
         "  output    {} ({stem}.pvd, history.csv, summary.json)\n",
         out_dir.display()
