@@ -402,15 +402,15 @@ fn main() {
             .map(|r| (r.dofs, r.phases[3] - r.block))
             .collect(),
     ));
-    for k in 0..3 {
-        series.push((
-            match k {
-                0 => "modelled operations: K̂",
-                1 => "modelled operations: coupling",
-                _ => "modelled operations: constraint block",
-            },
-            fitted.iter().map(|r| (r.dofs, r.flops[k])).collect(),
-        ));
+    for (k, name) in [
+        "modelled operations: K̂",
+        "modelled operations: coupling",
+        "modelled operations: constraint block",
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        series.push((name, fitted.iter().map(|r| (r.dofs, r.flops[k])).collect()));
     }
     series.push((
         "contact Newton",
