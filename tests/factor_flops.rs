@@ -5,7 +5,7 @@
 //! close to the documented values: the L5 parts, the L7 / L5 ratios and the fitted exponents.
 
 mod common;
-use common::{ensure_mesh, fitted_rate, shipped_case_on, stickslip, tempdir};
+use common::{ensure_mesh, fitted_rate, run_case_in, shipped_case_on, tempdir};
 use serde_json::{Value, json};
 
 /// `factor_flops` and the free DOFs of Fig. 2 on level `l` (four tangential steps, no VTU: the
@@ -15,20 +15,18 @@ fn flops_of(dir: &std::path::Path, l: usize) -> ([f64; 3], f64, f64) {
     let mut case = shipped_case_on("fig2.json", &format!("vm272_L{l}.msh"));
     case["stages"][1]["steps"] = json!(4);
     case["output"] = json!({"vtu": false});
-    let path = dir.join(format!("fig2_L{l}.json"));
-    std::fs::write(&path, serde_json::to_string_pretty(&case).unwrap()).unwrap();
-    let out = dir.join(format!("L{l}"));
     // The end summary of one level is printed (the others run quietly).
     let log = if l == 3 { "info" } else { "error" };
-    let (code, stdout, err) = stickslip(&[
-        "run",
-        path.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--log",
-        log,
-    ]);
-    assert_eq!(code, 0, "L{l}: {err}");
+    let level_dir = dir.join(format!("L{l}"));
+    std::fs::create_dir_all(&level_dir).unwrap();
+    let run = run_case_in(
+        &level_dir,
+        "fig2.json",
+        &serde_json::to_string(&case).unwrap(),
+        &["--log", log],
+    );
+    assert_eq!(run.code, 0, "L{l}: {}", run.stderr);
+    let out = run.out;
     let s: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let f = &s["factor_flops"];
@@ -37,7 +35,7 @@ fn flops_of(dir: &std::path::Path, l: usize) -> ([f64; 3], f64, f64) {
             .unwrap_or_else(|| panic!("L{l}: factor_flops.{k} missing: {f}"))
     });
     if l == 3 {
-        let printed = format!("{stdout}{err}");
+        let printed = &run.stderr;
         let line = printed
             .lines()
             .find(|x| x.trim_start().starts_with("factor"))
