@@ -44,6 +44,7 @@ fn options(method: Method) -> Options {
         verbose: false,
         history: Default::default(),
         normal_first: true,
+        hertz_start: true,
     }
 }
 

@@ -45,6 +45,7 @@ fn solve_model(model: &Model, load: f64, method: Method, kappa: f64) -> Solution
         verbose: false,
         history: Default::default(),
         normal_first: true,
+        hertz_start: true,
     };
     let prev = cm.system.initial_state();
     let out = model

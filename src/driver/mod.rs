@@ -147,6 +147,7 @@ pub fn simulate_with(
                 .as_ref()
                 .map_or_else(Default::default, |f| f.history),
             normal_first: true,
+            hertz_start: true,
         }),
         cstate: model.contact.as_ref().map(|c| c.system.initial_state()),
         lu_cache: solver::LuCache::sharing(model.contact_blocks()),

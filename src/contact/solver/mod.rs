@@ -304,6 +304,10 @@ pub struct Options {
     /// [`ContactSystem::solve_step`]); off, it starts from the closest nodes stuck, as before
     /// (kept for the comparison in `tests/friction_contact.rs`).
     pub normal_first: bool,
+    /// Start that frictionless problem from the contact set of a Hertzian line contact under
+    /// the pilot's normal force (see `newton::hertz_set`); off, from the closest nodes, as
+    /// before (kept for the comparison in `tests/friction_contact.rs`).
+    pub hertz_start: bool,
 }
 
 /// Result of one step solve.
