@@ -64,8 +64,23 @@ pub fn mat_filled(
     parallel: bool,
     fill: impl Fn(usize, &mut [f64]) + Sync,
 ) -> faer::Mat<f64> {
+    mat_filled_in(None, nrows, ncols, parallel, fill)
+}
+
+/// [`mat_filled`] in `spare` when it is given with those dimensions (an array made earlier,
+/// its pages already in place: [`Spare`]), else in fresh memory. The same values.
+pub fn mat_filled_in(
+    spare: Option<faer::Mat<f64>>,
+    nrows: usize,
+    ncols: usize,
+    parallel: bool,
+    fill: impl Fn(usize, &mut [f64]) + Sync,
+) -> faer::Mat<f64> {
     use rayon::prelude::*;
-    let mut a = faer::Mat::<f64>::with_capacity(nrows, ncols);
+    let mut a = match spare {
+        Some(a) if a.nrows() == nrows && a.ncols() == ncols && a.col_stride() >= 0 => a,
+        _ => faer::Mat::<f64>::with_capacity(nrows, ncols),
+    };
     let cols = SharedMat::of(&mut a);
     let one = |j: usize| {
         // SAFETY: column j lies within the capacity, and only this call touches it; its
@@ -80,6 +95,30 @@ pub fn mat_filled(
     // SAFETY: within the capacity, and every element is written above.
     unsafe { a.set_dims(nrows, ncols) };
     a
+}
+
+/// Two `m × m` arrays for the Delassus operator `W` and its Cholesky factor `C`, made (their
+/// pages faulted in) on a core that the symbolic analysis leaves idle, for the first numeric
+/// factorisation on that analysis to fill instead of fresh memory: at L7 each is 130 MB, whose
+/// first touch took 0.1–0.15 s of the factorisation and of the condensation.
+#[derive(Clone, Default)]
+pub struct Spare(std::sync::Arc<std::sync::Mutex<[Option<faer::Mat<f64>>; 2]>>);
+
+impl Spare {
+    /// Both arrays of order `m`, made now (zeros) on rayon's threads.
+    fn made(m: usize) -> Spare {
+        let make = || mat_filled(m, m, true, |_, _| {});
+        let (w, c) = rayon::join(make, make);
+        Spare(std::sync::Arc::new(std::sync::Mutex::new([
+            Some(w),
+            Some(c),
+        ])))
+    }
+
+    /// Takes array `k` (0: `W`, 1: `C`), if it is still there.
+    fn take(&self, k: usize) -> Option<faer::Mat<f64>> {
+        self.0.lock().unwrap_or_else(|p| p.into_inner())[k].take()
+    }
 }
 
 /// A vector of `n` zeros written by rayon's threads: its pages are faulted in on all cores.
@@ -462,6 +501,8 @@ pub struct SaddleSymbolic {
     row_idx: Vec<usize>,
     n: usize,
     m: usize,
+    /// The arrays of the first factorisation's `W` and `C`, made during the analysis.
+    spare: Spare,
 }
 
 /// A numeric `L D Lᵀ` factorisation of a saddle-point matrix (see [`SaddleSymbolic`]).
@@ -478,6 +519,8 @@ pub struct SaddleFactor {
     /// `W = Y K̂⁻¹ Yᵀ` (its lower triangle) as the factorisation found it, the Schur
     /// complement of the constraint block, until [`Self::delassus`] takes it.
     schur: std::sync::Mutex<Option<faer::Mat<f64>>>,
+    /// The array of `C` made during the analysis ([`Spare`]), until [`Self::delassus`] fills it.
+    spare_c: std::sync::Mutex<Option<faer::Mat<f64>>>,
     /// Wall time of the constraint block within the numeric factorisation (its updates, the
     /// elimination of the top separator's columns from it and its `L D Lᵀ`), seconds; zero
     /// where it was not timed apart (faer's loop, a factor from the model cache).
@@ -537,6 +580,9 @@ fn order_leading(
     })?;
     Ok(fwd)
 }
+
+/// Constraint rows from which [`Spare`] arrays are made during the analysis (8 MB each).
+pub const SPARE_FROM: usize = 1024;
 
 /// Free DOFs from which a contact model's DOFs are ordered by nested dissection rather than
 /// AMD: below it AMD's cheaper ordering wins, above it nested dissection's smaller factor does
@@ -618,13 +664,26 @@ impl SaddleSymbolic {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
-        let inner = cholesky::factorize_symbolic_cholesky(
-            sym(size, &cp, &ri),
-            Side::Upper,
-            cholesky::SymmetricOrdering::Custom(perm),
-            params,
-        )
-        .map_err(|e| match e {
+        // faer's symbolic analysis runs on one thread: the arrays of `W` and `C` are made on
+        // the other meanwhile (none below `SPARE_FROM` constraint rows).
+        let (inner, spare) = rayon::join(
+            || {
+                cholesky::factorize_symbolic_cholesky(
+                    sym(size, &cp, &ri),
+                    Side::Upper,
+                    cholesky::SymmetricOrdering::Custom(perm),
+                    params,
+                )
+            },
+            || {
+                if m >= SPARE_FROM {
+                    Spare::made(m)
+                } else {
+                    Spare::default()
+                }
+            },
+        );
+        let inner = inner.map_err(|e| match e {
             faer::sparse::FaerError::IndexOverflow => FactorError::IndexOverflow { n: size },
             _ => FactorError::OutOfMemory {
                 what: "the symbolic analysis",
@@ -640,6 +699,7 @@ impl SaddleSymbolic {
             row_idx: ri,
             n,
             m,
+            spare,
         })
     }
 
@@ -778,7 +838,7 @@ impl SaddleSymbolic {
                 rows: &self.layout.rows,
                 val_ptr: &self.layout.val_ptr,
             };
-            schur = crate::supernodal::factorise(&st, lower, l, par, Some(n))
+            schur = crate::supernodal::factorise(&st, lower, l, par, Some((n, self.spare.take(0))))
                 .map_err(|pivot| FactorError::NotPositiveDefinite { pivot, n })?;
             if schur.is_none() {
                 crate::trace::mark("factor: constraint block not in the root (W by the product)");
@@ -817,6 +877,7 @@ impl SaddleSymbolic {
             None => FactorValues::Owned(owned),
         };
         let mut f = self.from_values(std::sync::Arc::new(values))?;
+        f.spare_c = std::sync::Mutex::new(self.spare.take(1));
         if let Some((w, seconds)) = schur {
             f.constraint_block_s = seconds;
             *f.schur.lock().unwrap_or_else(|p| p.into_inner()) = Some(w);
@@ -1347,6 +1408,7 @@ impl SaddleFactor {
             m,
             plan: std::sync::OnceLock::new(),
             schur: std::sync::Mutex::new(None),
+            spare_c: std::sync::Mutex::new(None),
             constraint_block_s: 0.0,
         })
     }
@@ -1571,7 +1633,12 @@ impl SaddleFactor {
             return None;
         }
         let kk = n - node.start;
-        Some(mat_filled(m, m, true, |j, col| {
+        let spare = self
+            .spare_c
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .take();
+        Some(mat_filled_in(spare, m, m, true, |j, col| {
             let sj = (-node.at(kk + j, kk + j)).sqrt();
             col[j] = sj;
             for i in j + 1..m {
@@ -1664,6 +1731,43 @@ mod tests {
         let sym = SaddleSymbolic::analyse(n, &cp, &ri, &y).unwrap();
         let f = sym.factorise(&kv, &y).unwrap();
         (f, y)
+    }
+
+    /// The first factorisation on an analysis with at least [`SPARE_FROM`] constraint rows
+    /// fills the arrays made during the analysis ([`Spare`]); a second one, on fresh memory,
+    /// gives the same `W` and `C` bit for bit.
+    #[test]
+    fn the_arrays_made_during_the_analysis_give_the_same_delassus_operator() {
+        let (n, m) = (1300, SPARE_FROM + 8);
+        let (cp, ri, kv, _) = small_saddle(n);
+        let y: Rows = (0..m).map(|i| vec![(i, 1.0), (i + 1, -0.5)]).collect();
+        let sym = SaddleSymbolic::analyse(n, &cp, &ri, &y).unwrap();
+        let delassus = || {
+            let f = sym.factorise(&kv, &y).unwrap();
+            let (w, c) = f.delassus(true).expect("W positive definite");
+            (w, c.expect("C from the root"))
+        };
+        let spare = |k: usize| sym.spare.0.lock().unwrap()[k].is_some();
+        assert!(spare(0) && spare(1), "made during the analysis");
+        let (w1, c1) = delassus();
+        assert!(!spare(0) && !spare(1), "taken by the first factorisation");
+        let (w2, c2) = delassus();
+        assert_eq!(w1, w2);
+        assert_eq!(c1, c2);
+        // And it is the Delassus operator: W e_0 = Y K̂⁻¹ Yᵀ e_0.
+        let mut x = vec![0.0; n];
+        for &(r, v) in &y[0] {
+            x[r] += v;
+        }
+        sym.factorise(&kv, &y).unwrap().solve_in_place(&mut x);
+        for (i, row) in y.iter().enumerate().take(40) {
+            let yi: f64 = row.iter().map(|&(r, v)| v * x[r]).sum();
+            assert!(
+                (yi - w1[(i, 0)]).abs() <= 1e-12 * w1[(0, 0)],
+                "{i}: {yi} vs {}",
+                w1[(i, 0)]
+            );
+        }
     }
 
     #[test]

@@ -435,7 +435,7 @@ pub fn factorise(
     a: LowerCsc,
     l: &mut [f64],
     par: Par,
-    schur_from: Option<usize>,
+    schur_from: Option<(usize, Option<faer::Mat<f64>>)>,
 ) -> Result<Option<(faer::Mat<f64>, f64)>, usize> {
     use rayon::prelude::*;
     assert!(
@@ -460,11 +460,12 @@ pub fn factorise(
     let last = nsup.checked_sub(1);
     let mut schur = schur_from
         .zip(last)
-        .filter(|&(n, s)| n < size && st.begin[s] <= n && st.pattern(s).is_empty())
-        .map(|(n, s)| Schur {
+        .filter(|((n, _), s)| *n < size && st.begin[*s] <= *n && st.pattern(*s).is_empty())
+        .map(|((n, spare), s)| Schur {
             s,
             kk: n - st.begin[s],
             w: None,
+            spare,
             seconds: 0.0,
         });
     // One set of working arrays per thread that runs a subtree (the row map alone is 8 bytes
@@ -723,6 +724,8 @@ struct Schur {
     s: usize,
     kk: usize,
     w: Option<faer::Mat<f64>>,
+    /// An array for `w` made earlier ([`crate::linsolve::Spare`]), if any.
+    spare: Option<faer::Mat<f64>>,
     /// Wall time of the constraint block: the updates of its columns, the elimination of the
     /// leading columns from it and its `L D Lᵀ`.
     seconds: f64,
@@ -787,11 +790,17 @@ impl Schur {
         }
         let m = a_mm.nrows();
         let view = a_mm.rb();
-        self.w = Some(crate::linsolve::mat_filled(m, m, true, |j, col| {
-            for i in j..m {
-                col[i] = -view[(i, j)];
-            }
-        }));
+        self.w = Some(crate::linsolve::mat_filled_in(
+            self.spare.take(),
+            m,
+            m,
+            true,
+            |j, col| {
+                for i in j..m {
+                    col[i] = -view[(i, j)];
+                }
+            },
+        ));
         ldlt(a_mm, par, stack).map_err(|i| i + kk)
     }
 }
