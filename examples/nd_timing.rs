@@ -1,0 +1,79 @@
+//! Times the nested-dissection ordering of the stiffness of both VM272 half-cylinders
+//! (`bottom` and `top` clamped, as in `benches/ordering.rs`) on one thread and on rayon's pool,
+//! best of `REPEAT` (default 5), and prints a hash of the permutation, so that two builds can be
+//! compared for the same ordering: `cargo run --release --example nd_timing -- MESH [REPEAT]`.
+use std::time::Instant;
+use stickslip::assembly::UpperCsc;
+use stickslip::dofs::{DofMap, SupportSpec};
+use stickslip::elasticity::Material;
+
+fn pattern(path: &std::path::Path) -> UpperCsc {
+    let mesh = stickslip::mesh::gmsh::read(path).expect("mesh");
+    let mat = Material { e: 200.0, nu: 0.3 };
+    let mut elems = Vec::new();
+    for body in ["lower_body", "upper_body"] {
+        let g = mesh.group(body).expect("body group");
+        elems.extend(g.elements.iter().map(|&e| (e, mat)));
+    }
+    let mut active = vec![false; mesh.nodes.len()];
+    for (e, _) in &elems {
+        for &n in &mesh.triangles[*e].nodes {
+            active[n] = true;
+        }
+    }
+    let bottom = mesh.group_nodes(mesh.group("bottom").expect("group bottom"));
+    let top = mesh.group_nodes(mesh.group("top").expect("group top"));
+    let sup = [
+        SupportSpec {
+            group: "bottom",
+            nodes: &bottom,
+            value: [Some(0.0), Some(0.0)],
+        },
+        SupportSpec {
+            group: "top",
+            nodes: &top,
+            value: [Some(0.0), Some(0.0)],
+        },
+    ];
+    let dofs = DofMap::build(&mesh.node_tags, &active, &sup, None, &[]).expect("dofs");
+    UpperCsc::pattern(&mesh, &elems, &dofs)
+}
+
+fn main() {
+    let path = std::path::PathBuf::from(std::env::args().nth(1).expect("MESH"));
+    let repeat: usize = std::env::args()
+        .nth(2)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(5);
+    let k = pattern(&path);
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool");
+    let mut best = [f64::INFINITY; 2];
+    let mut hash = 0u64;
+    for _ in 0..repeat {
+        for (i, best) in best.iter_mut().enumerate() {
+            let t = Instant::now();
+            let fwd = if i == 0 {
+                one.install(|| stickslip::ordering::nested_dissection(k.n, &k.col_ptr, &k.row_idx))
+            } else {
+                stickslip::ordering::nested_dissection(k.n, &k.col_ptr, &k.row_idx)
+            };
+            *best = best.min(t.elapsed().as_secs_f64());
+            let h = fwd.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &v| {
+                (h ^ v as u64).wrapping_mul(0x0100_0000_01b3)
+            });
+            assert!(hash == 0 || hash == h, "the ordering changed between runs");
+            hash = h;
+        }
+    }
+    println!(
+        "{}: n = {}, nested dissection best of {repeat}: {:.3} s on one thread, {:.3} s on {} threads; permutation hash {hash:016x}",
+        path.display(),
+        k.n,
+        best[0],
+        best[1],
+        rayon::current_num_threads()
+    );
+}
