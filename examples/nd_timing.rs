@@ -3,41 +3,9 @@
 //! best of `REPEAT` (default 5), and prints a hash of the permutation, so that two builds can be
 //! compared for the same ordering: `cargo run --release --example nd_timing -- MESH [REPEAT]`.
 use std::time::Instant;
-use stickslip::assembly::UpperCsc;
-use stickslip::dofs::{DofMap, SupportSpec};
-use stickslip::elasticity::Material;
 
-fn pattern(path: &std::path::Path) -> UpperCsc {
-    let mesh = stickslip::mesh::gmsh::read(path).expect("mesh");
-    let mat = Material { e: 200.0, nu: 0.3 };
-    let mut elems = Vec::new();
-    for body in ["lower_body", "upper_body"] {
-        let g = mesh.group(body).expect("body group");
-        elems.extend(g.elements.iter().map(|&e| (e, mat)));
-    }
-    let mut active = vec![false; mesh.nodes.len()];
-    for (e, _) in &elems {
-        for &n in &mesh.triangles[*e].nodes {
-            active[n] = true;
-        }
-    }
-    let bottom = mesh.group_nodes(mesh.group("bottom").expect("group bottom"));
-    let top = mesh.group_nodes(mesh.group("top").expect("group top"));
-    let sup = [
-        SupportSpec {
-            group: "bottom",
-            nodes: &bottom,
-            value: [Some(0.0), Some(0.0)],
-        },
-        SupportSpec {
-            group: "top",
-            nodes: &top,
-            value: [Some(0.0), Some(0.0)],
-        },
-    ];
-    let dofs = DofMap::build(&mesh.node_tags, &active, &sup, None, &[]).expect("dofs");
-    UpperCsc::pattern(&mesh, &elems, &dofs)
-}
+#[path = "../benches/common/clamped.rs"]
+mod clamped;
 
 fn main() {
     let path = std::path::PathBuf::from(std::env::args().nth(1).expect("MESH"));
@@ -45,7 +13,7 @@ fn main() {
         .nth(2)
         .and_then(|s| s.parse().ok())
         .unwrap_or(5);
-    let k = pattern(&path);
+    let k = clamped::stiffness(&path);
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()

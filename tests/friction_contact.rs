@@ -724,6 +724,28 @@ fn fig2_on_l4(lower: (f64, f64), upper: (f64, f64)) -> stickslip::model::Model {
     stickslip::model::Model::build(&case, &repo().join("cases/fig2.json")).unwrap()
 }
 
+/// How far contact state `a` is from `b`: the largest difference of the normal and tangential
+/// forces over `b`'s largest normal force, and of the pilot's displacements over `b`'s normal
+/// one.
+fn state_difference(
+    a: &stickslip::contact::solver::State,
+    b: &stickslip::contact::solver::State,
+) -> (f64, f64) {
+    let scale = b.f_n.iter().fold(0.0f64, |m, f| m.max(f.abs()));
+    let dev = a
+        .f_n
+        .iter()
+        .zip(&b.f_n)
+        .chain(a.f_t.iter().zip(&b.f_t))
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0f64, f64::max)
+        / scale;
+    let du = (0..2)
+        .map(|k| (a.pilot_u[k] - b.pilot_u[k]).abs() / b.pilot_u[1].abs())
+        .fold(0.0f64, f64::max);
+    (dev, du)
+}
+
 /// A frictional first contact (every node open before the step) starts from the frictionless
 /// contact set, so that the Delassus block it factorises has the unknowns of the contact,
 /// not of every candidate. The step's answer must not depend on that start: Fig. 2's normal
@@ -777,18 +799,7 @@ fn first_contact_from_the_frictionless_set_gives_the_same_step() {
             .iter()
             .filter(|s| **s == stickslip::contact::solver::Status::Slip)
             .count();
-        let scale = sb.f_n.iter().fold(0.0f64, |m, f| m.max(f.abs()));
-        let dev = sa
-            .f_n
-            .iter()
-            .zip(&sb.f_n)
-            .chain(sa.f_t.iter().zip(&sb.f_t))
-            .map(|(x, y)| (x - y).abs())
-            .fold(0.0f64, f64::max)
-            / scale;
-        let du = (0..2)
-            .map(|k| (sa.pilot_u[k] - sb.pilot_u[k]).abs() / sb.pilot_u[1].abs())
-            .fold(0.0f64, f64::max);
+        let (dev, du) = state_difference(sa, sb);
         println!(
             "{name}: {} candidates, {in_contact} in contact ({slipping} slip); largest block {block_a} from the frictionless set, {block_b} from the closest nodes; iterations {} and {}; forces differ by {dev:.1e}, pilot displacement by {du:.1e}",
             cm.system.ns, a.iterations, b.iterations
@@ -866,18 +877,7 @@ fn first_contact_from_the_hertzian_set_gives_the_same_step_in_fewer_iterations()
         };
         let (a, b) = (solve(true), solve(false));
         let (sa, sb) = (&a.state, &b.state);
-        let scale = sb.f_n.iter().fold(0.0f64, |m, f| m.max(f.abs()));
-        let dev = sa
-            .f_n
-            .iter()
-            .zip(&sb.f_n)
-            .chain(sa.f_t.iter().zip(&sb.f_t))
-            .map(|(x, y)| (x - y).abs())
-            .fold(0.0f64, f64::max)
-            / scale;
-        let du = (0..2)
-            .map(|k| (sa.pilot_u[k] - sb.pilot_u[k]).abs() / sb.pilot_u[1].abs())
-            .fold(0.0f64, f64::max);
+        let (dev, du) = state_difference(sa, sb);
         let in_contact = sa.status.iter().filter(|s| **s != Status::Open).count();
         println!(
             "{name}: {in_contact} of {} in contact; iterations {} from the Hertzian set, {} from the closest nodes; forces differ by {dev:.1e}, pilot displacement by {du:.1e}",
