@@ -629,8 +629,9 @@ pub(super) const NORMAL_FIRST_FROM: usize = 512;
 /// (in contact, frictionless: [`Status::Slip`]), or `None` when fewer than three are (a load
 /// too small to tell, or none). Where the gap is not such a parabola this is only a start the
 /// iteration corrects; where it is (the paper's cylinders on L5: 409 nodes from it against 409
-/// at convergence) the first contact takes three iterations instead of eleven, each set a
-/// leading set of the prefix factor (the nodes by increasing initial gap).
+/// at convergence) the frictionless solve takes two iterations instead of eleven (Fig. 2's
+/// first step five instead of fourteen), each set a leading set of the prefix factor (the
+/// nodes by increasing initial gap).
 fn hertz_set(gap0: &[f64], p: f64, e_star: f64) -> Option<Vec<Status>> {
     let g_min = gap0.iter().copied().fold(f64::INFINITY, f64::min);
     let edge = g_min + 2.0 * p / (std::f64::consts::PI * e_star);
