@@ -1540,6 +1540,13 @@ impl SaddleFactor {
         use faer::linalg::matmul::triangular::{BlockStructure, matmul};
         let m = self.m;
         let schur = self.schur.lock().unwrap_or_else(|p| p.into_inner()).take();
+        // The array made for `C` during the analysis: filled below, or freed with this call on
+        // the paths that do not need it (not kept by the factor for the rest of the run).
+        let spare_c = self
+            .spare_c
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .take();
         if let Some(mut w) = schur {
             // W as the factorisation found it (its lower triangle): no product.
             let values = self.values();
@@ -1556,7 +1563,7 @@ impl SaddleFactor {
             }
             // The factorisation copies W only where the constraint columns end the root.
             let c = self
-                .c_from_root(&values)
+                .c_from_root(&values, spare_c)
                 .expect("W copied from the root supernode");
             return Some((w, Some(c)));
         }
@@ -1623,8 +1630,8 @@ impl SaddleFactor {
 
     /// `C = L_MM (−D_MM)^½` (lower, as [`cholesky_of_w`] gives it, the same bits) read
     /// straight from the last supernode when it holds every constraint column (as on every
-    /// mesh of the ladder), else `None`.
-    fn c_from_root(&self, values: &[f64]) -> Option<faer::Mat<f64>> {
+    /// mesh of the ladder), else `None`; in `spare` when given ([`Spare`]).
+    fn c_from_root(&self, values: &[f64], spare: Option<faer::Mat<f64>>) -> Option<faer::Mat<f64>> {
         let (n, m) = (self.n, self.m);
         let node = self
             .layout
@@ -1633,11 +1640,6 @@ impl SaddleFactor {
             return None;
         }
         let kk = n - node.start;
-        let spare = self
-            .spare_c
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .take();
         Some(mat_filled_in(spare, m, m, true, |j, col| {
             let sj = (-node.at(kk + j, kk + j)).sqrt();
             col[j] = sj;
@@ -1754,6 +1756,13 @@ mod tests {
         let (w2, c2) = delassus();
         assert_eq!(w1, w2);
         assert_eq!(c1, c2);
+        // Without `C`, the factor does not keep its array either (130 MB at L7).
+        let sym2 = SaddleSymbolic::analyse(n, &cp, &ri, &y).unwrap();
+        let f = sym2.factorise(&kv, &y).unwrap();
+        assert!(f.spare_c.lock().unwrap().is_some(), "handed to the factor");
+        let (w3, c3) = f.delassus(false).expect("W positive definite");
+        assert!(c3.is_none() && w3 == w1);
+        assert!(f.spare_c.lock().unwrap().is_none(), "freed with W");
         // And it is the Delassus operator: W e_0 = Y K̂⁻¹ Yᵀ e_0.
         let mut x = vec![0.0; n];
         for &(r, v) in &y[0] {

@@ -111,6 +111,12 @@ fn one_and_two_threads(name: &str, mesh: &str, csvs: usize, vtus: usize) -> (usi
             json!(n),
             "summary.json of the --threads {n} run"
         );
+        if name == "fig2.json" {
+            // The README's figures for the shipped Fig. 2 (the first contact from Hertz's
+            // contact set): 180 Newton iterations, 2 Delassus blocks factorised.
+            assert_eq!(s["newton_iterations"], json!(180), "--threads {n}");
+            assert_eq!(s["lu_factorisations"], json!(2), "--threads {n}");
+        }
     }
     let (f1, f2) = (compared_files(&o1), compared_files(&o2));
     assert_eq!(f1, f2, "the two runs wrote different sets of files");

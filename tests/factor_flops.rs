@@ -46,6 +46,12 @@ fn flops_of(dir: &std::path::Path, l: usize) -> ([f64; 3], f64, f64) {
             "{line}"
         );
     }
+    // The first step's Newton iterations, the first contact from Hertz's contact set (README,
+    // "Twenty-third session": 5 on L5 instead of 14, 7 on L7 instead of 16; L3's zone is below
+    // the frictionless start's 512 contact unknowns).
+    let first = s["steps"][0]["iterations"].as_u64().unwrap();
+    let want = [9, 5, 5, 6, 7][l - 3];
+    assert_eq!(first, want, "L{l}: the first step's Newton iterations");
     (
         parts,
         s["dofs_free"].as_f64().unwrap(),
