@@ -90,21 +90,37 @@ def main():
                          f", factorisations {sa.get('lu_factorisations')}/{sb.get('lu_factorisations')}")
                 ha, hb = ra[2], rb[2]
                 header = ha[0] if ha else []
-                diffs, worst = 0, 0.0
+                diffs, worst, scaled = 0, 0.0, 0.0
                 same &= len(ha) == len(hb)
+                # Each column's largest magnitude over both runs (differences of values near
+                # zero are judged against it).
+                size = {}
+                for r in ha[1:] + hb[1:]:
+                    for k, x in enumerate(r):
+                        try:
+                            size[k] = max(size.get(k, 0.0), abs(float(x)))
+                        except ValueError:
+                            pass
                 for r1, r2 in zip(ha[1:], hb[1:]):
                     for k, (x, y) in enumerate(zip(r1, r2)):
                         if header[k] in ("wall_s", "iterations") or x == y:
                             continue
                         diffs += 1
                         try:
-                            worst = max(worst, abs(float(x) - float(y)) / max(abs(float(x)), abs(float(y))))
+                            d = abs(float(x) - float(y))
+                            worst = max(worst, d / max(abs(float(x)), abs(float(y))))
+                            scaled = max(scaled, d / size[k])
                         except ValueError:
                             worst = float("nan")
                 same &= diffs == 0
                 first = lambda h: h[1][header.index("iterations")] if len(h) > 1 else "-"
                 line += (f", history rows {len(ha) - 1}/{len(hb) - 1}, values differing {diffs}"
-                         f" (largest relative {worst:.1e}), first step iterations {first(ha)}/{first(hb)}")
+                         f" (largest relative {worst:.1e}, to the column's largest {scaled:.1e})"
+                         f", first step iterations {first(ha)}/{first(hb)}")
+                qb = (sb.get("friction") or {}).get("q_max")
+                qa = (sa.get("friction") or {}).get("q_max")
+                if qa is not None and qb is not None and qa != qb:
+                    line += f", Q_max {qa:.9g}/{qb:.9g} ({(qb - qa) / abs(qa):+.1e})"
             elif (ra[1] is None) != (rb[1] is None):
                 same = False
             line += "" if same else "  <-- DIFFERS"

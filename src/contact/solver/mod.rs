@@ -265,10 +265,12 @@ impl PrefixFactor {
 }
 
 /// Contact unknowns (rows of `W`) from which the constraint rows are factorised in the order of
-/// [`PrefixFactor`] and its factor kept (the levels where the structured solve's shortcuts are
-/// on, L6 up on the VM272 ladder; below, the rows stay in the order of μ and every result is
-/// what it was before the prefix factor existed).
-pub const PREFIX_FROM: usize = newton::SHORTCUTS_FROM;
+/// [`PrefixFactor`] and its factor kept (L6 up on the VM272 ladder; below, the rows stay in the
+/// order of μ and every result is what it was before the prefix factor existed). It was the
+/// threshold of the structured solve's shortcuts until those came down to L5
+/// ([`newton::SHORTCUTS_FROM`]); the model's factorisation and its cache entries did not change
+/// with them.
+pub const PREFIX_FROM: usize = 1536;
 
 /// The order of [`PrefixFactor`] for a system of `ns` slave nodes with initial nodal gaps
 /// `gap0` (mortar gaps, already per unit weight) and `m − 2 ns` anchors (a model takes it
