@@ -68,9 +68,15 @@ fn remove_stale_tempdirs() {
 /// Runs the `stickslip` binary with `args`; returns (exit status, -1 without one; stdout;
 /// stderr).
 pub fn stickslip(args: &[&str]) -> (i32, String, String) {
+    stickslip_env(args, &[])
+}
+
+/// [`stickslip`] with the environment variables `envs` set for the process.
+pub fn stickslip_env(args: &[&str], envs: &[(&str, &str)]) -> (i32, String, String) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
         // No model cache: tests leave the user's cache directory alone.
         .env("STICKSLIP_NO_CACHE", "1")
+        .envs(envs.iter().copied())
         .args(args)
         .output()
         .unwrap();
