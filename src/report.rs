@@ -94,6 +94,9 @@ pub struct Summary {
     /// Dense factorisations and GMRES iterations of the contact Newton solves.
     pub lu_factorisations: usize,
     pub gmres_iterations: usize,
+    /// Contact unknowns from which the structured contact solve takes its shortcuts (null:
+    /// switched off by `STICKSLIP_CONTACT_SHORTCUTS=off`, every iteration solved directly).
+    pub contact_shortcuts_from: Option<usize>,
     pub peak_memory_mib: Option<f64>,
     /// The numeric factorisation's modelled operations (null where this run did not analyse
     /// a contact model: a model-cache hit, or no contact).
@@ -468,6 +471,7 @@ pub fn summarise(
         newton_iterations,
         lu_factorisations,
         gmres_iterations,
+        contact_shortcuts_from: crate::contact::solver::shortcuts_from(),
         peak_memory_mib: crate::output::peak_memory_bytes().map(|b| b as f64 / (1024.0 * 1024.0)),
         factor_flops: model.factor_flops,
         friction,

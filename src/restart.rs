@@ -39,11 +39,18 @@ pub fn run_id(case: &Case, case_path: &Path) -> Result<String, RunError> {
             why: format!("cannot read it: {e}"),
         })
     };
-    Ok(crate::output::content_id(&[
-        &read(case_path)?,
-        &read(&case.mesh_path(case_path))?,
+    // A run without the contact solve's shortcuts takes another path in the last digits: its
+    // states resume only without them (the default adds nothing, so earlier states resume).
+    let (case_bytes, mesh_bytes) = (read(case_path)?, read(&case.mesh_path(case_path))?);
+    let mut parts: Vec<&[u8]> = vec![
+        &case_bytes,
+        &mesh_bytes,
         env!("CARGO_PKG_VERSION").as_bytes(),
-    ]))
+    ];
+    if crate::contact::solver::shortcuts_from().is_none() {
+        parts.push(b"STICKSLIP_CONTACT_SHORTCUTS=off");
+    }
+    Ok(crate::output::content_id(&parts))
 }
 
 /// The file name of the state of `step`.
@@ -86,8 +93,9 @@ pub fn load(path: &Path, case: &Case, case_path: &Path) -> Result<SavedRun, RunE
         return Err(bad(
             &file,
             format!(
-                "is the state of another case, mesh or program version (id {}, this case {id}): \
-                 resume with the case file that wrote it",
+                "is the state of another case, mesh or program version, or of a run with another \
+                 STICKSLIP_CONTACT_SHORTCUTS (id {}, this case {id}): resume with the case file \
+                 and the setting that wrote it",
                 saved.id
             ),
         ));

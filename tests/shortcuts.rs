@@ -10,7 +10,9 @@
 //! * Fig. 2 with f_s = 0.2, Λ = 0.025 loaded past its peak under force control: both runs
 //!   bracket Q_max (exit 5) and agree on it within 5e-5 of it — the largest of five such runs
 //!   measured (3.5e-5; the others 4e-10 to 1.7e-9): near the peak, where the tangent is nearly
-//!   singular, the digit the shortcuts lose decides at which load a step still converges.
+//!   singular, the digit the shortcuts lose decides at which load a step still converges;
+//! * a restart state written with the shortcuts is refused by a run without them (its id says
+//!   which), and resumes with them.
 
 mod common;
 
@@ -95,6 +97,9 @@ fn the_shortcuts_give_fig2_on_l5_within_round_off_of_direct_solves() {
     let (sa, sb) = (summary(&with), summary(&without));
     assert_eq!(sa["newton_iterations"], json!(174));
     assert_eq!(sb["newton_iterations"], json!(180));
+    // The summary says which path the run took.
+    assert_eq!(sa["contact_shortcuts_from"], json!(768));
+    assert_eq!(sb["contact_shortcuts_from"], Value::Null);
 }
 
 #[test]
@@ -115,4 +120,49 @@ fn the_shortcuts_bracket_a_force_controlled_peak_on_l5_where_direct_solves_do() 
         ((qa - qb) / qb).abs() <= 5e-5,
         "Q_max {qa} with the shortcuts, {qb} without"
     );
+}
+
+#[test]
+fn a_state_resumes_only_with_the_shortcut_setting_that_wrote_it() {
+    // Fig. 2 on L3 with a state at every 10th step.
+    let mut case = shipped_case_on("fig2.json", "vm272_L3.msh");
+    case["output"] = json!({"vtu": true, "every": 10});
+    let (_, out) = run("resume", &case, true);
+    let dir = out.parent().unwrap().to_path_buf();
+    let state = out.join("state_0020.json");
+    assert!(state.exists(), "no state at step 20 in {}", out.display());
+    let resume = |shortcuts: bool, name: &str| {
+        let envs: &[(&str, &str)] = if shortcuts {
+            &[]
+        } else {
+            &[("STICKSLIP_CONTACT_SHORTCUTS", "off")]
+        };
+        let o = dir.join(name);
+        let (code, _, stderr) = stickslip_env(
+            &[
+                "run",
+                dir.join("case.json").to_str().unwrap(),
+                "--out",
+                o.to_str().unwrap(),
+                "--resume",
+                state.to_str().unwrap(),
+                "--quiet",
+            ],
+            envs,
+        );
+        (code, stderr, o)
+    };
+    let (code, stderr, o) = resume(false, "off");
+    assert_eq!(code, 2, "{stderr}");
+    assert!(
+        stderr.contains("STICKSLIP_CONTACT_SHORTCUTS") && stderr.contains("state_0020.json"),
+        "{stderr}"
+    );
+    assert!(!o.exists(), "a refused resume wrote {}", o.display());
+    let (code, stderr, o) = resume(true, "on");
+    assert_eq!(code, 0, "{stderr}");
+    // The resumed run writes the whole history, as the uninterrupted one did (the files
+    // themselves are compared by tests/restart.rs).
+    let rows = |d: &std::path::Path| Table::read(&d.join("history.csv")).rows.len();
+    assert_eq!((rows(&o), rows(&out)), (41, 41));
 }

@@ -42,6 +42,13 @@ mod newton;
 pub use enforce::{Equation, NewtonRows, NewtonSystem, SlipLin, SpecialRow, WTerms};
 pub use linalg::{BlockRecord, BlockStore, LuCache, SolveTimings};
 
+/// The number of contact unknowns from which the structured solve takes its shortcuts, or
+/// `None` where `STICKSLIP_CONTACT_SHORTCUTS=off` switched them off (reported in the summary
+/// and part of a restart state's identity: the two paths differ in the last digits).
+pub fn shortcuts_from() -> Option<usize> {
+    newton::shortcuts_allowed().then_some(newton::SHORTCUTS_FROM)
+}
+
 use crate::friction::FrictionLaw;
 use faer::Mat;
 
