@@ -47,9 +47,7 @@ pub fn run_id(case: &Case, case_path: &Path) -> Result<String, RunError> {
         &mesh_bytes,
         env!("CARGO_PKG_VERSION").as_bytes(),
     ];
-    if crate::contact::solver::shortcuts_from().is_none() {
-        parts.push(b"STICKSLIP_CONTACT_SHORTCUTS=off");
-    }
+    parts.extend(crate::contact::solver::path_identity());
     Ok(crate::output::content_id(&parts))
 }
 

@@ -12,7 +12,7 @@
 //!   measured (3.5e-5; the others 4e-10 to 1.7e-9): near the peak, where the tangent is nearly
 //!   singular, the digit the shortcuts lose decides at which load a step still converges;
 //! * a restart state written with the shortcuts is refused by a run without them (its id says
-//!   which), and resumes with them.
+//!   which), and resumes with them; a sweep shard's part likewise.
 
 mod common;
 
@@ -165,4 +165,56 @@ fn a_state_resumes_only_with_the_shortcut_setting_that_wrote_it() {
     // themselves are compared by tests/restart.rs).
     let rows = |d: &std::path::Path| Table::read(&d.join("history.csv")).rows.len();
     assert_eq!((rows(&o), rows(&out)), (41, 41));
+}
+
+#[test]
+fn a_sweep_part_goes_on_only_with_the_shortcut_setting_that_wrote_it() {
+    // Two laws of Fig. 2 on L1, shard 0 of 2 (one row).
+    let mut case = shipped_case_on("fig2.json", "vm272_L1.msh");
+    case["output"] = json!({"vtu": false});
+    let dir = tempdir("shortcuts-shard");
+    let (case_path, sweep_path, out) = (
+        dir.join("case.json"),
+        dir.join("sweep.json"),
+        dir.join("out"),
+    );
+    std::fs::write(&case_path, serde_json::to_string(&case).unwrap()).unwrap();
+    let laws = json!({"friction": [
+        {"shape": "ramp", "fs": 0.15, "fd": 0.1, "lambda": 0.05, "radius": 4.0, "load": 10.0},
+        {"shape": "ramp", "fs": 0.2, "fd": 0.1, "lambda": 0.05, "radius": 4.0, "load": 10.0}
+    ]});
+    std::fs::write(&sweep_path, laws.to_string()).unwrap();
+    let shard = |envs: &[(&str, &str)]| {
+        stickslip_env(
+            &[
+                "sweep",
+                case_path.to_str().unwrap(),
+                sweep_path.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "--shard",
+                "0/2",
+                "--quiet",
+            ],
+            envs,
+        )
+    };
+    let (code, _, stderr) = shard(&[]);
+    assert_eq!(code, 0, "{stderr}");
+    let part = out.join("part_0_of_2.jsonl");
+    let before = std::fs::read(&part).unwrap();
+    let (code, _, stderr) = shard(&[("STICKSLIP_CONTACT_SHORTCUTS", "off")]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(
+        stderr.contains("another sweep") && stderr.contains("STICKSLIP_CONTACT_SHORTCUTS"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read(&part).unwrap(),
+        before,
+        "the part was touched"
+    );
+    // With the setting that wrote it, the shard finds its row done.
+    let (code, _, stderr) = shard(&[]);
+    assert_eq!(code, 0, "{stderr}");
 }

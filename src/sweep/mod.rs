@@ -104,12 +104,16 @@ pub fn run(case_path: &Path, sweep_path: &Path, opts: &SweepOptions) -> Result<(
     }
     let (k, n) = opts.shard.unwrap_or((0, 1));
     let total = rows.len();
-    let id = crate::output::content_id(&[
-        &read(case_path)?,
-        &read(&case.mesh_path(case_path))?,
+    let (case_bytes, mesh_bytes) = (read(case_path)?, read(&case.mesh_path(case_path))?);
+    let mut id_parts: Vec<&[u8]> = vec![
+        &case_bytes,
+        &mesh_bytes,
         &sweep_bytes,
         env!("CARGO_PKG_VERSION").as_bytes(),
-    ]);
+    ];
+    // Rows solved without the contact solve's shortcuts are another sweep's.
+    id_parts.extend(crate::contact::solver::path_identity());
+    let id = crate::output::content_id(&id_parts);
     let out_dir = opts.out.clone().unwrap_or_else(|| {
         PathBuf::from("out").join(format!(
             "{}_sweep",

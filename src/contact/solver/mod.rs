@@ -49,6 +49,14 @@ pub fn shortcuts_from() -> Option<usize> {
     newton::shortcuts_allowed().then_some(newton::SHORTCUTS_FROM)
 }
 
+/// What a run's identity (a restart state's, a sweep part's) adds for the contact-solve path:
+/// nothing by default (earlier identities stay valid), a marker with the shortcuts off.
+pub fn path_identity() -> Option<&'static [u8]> {
+    shortcuts_from()
+        .is_none()
+        .then_some(b"STICKSLIP_CONTACT_SHORTCUTS=off".as_slice())
+}
+
 use crate::friction::FrictionLaw;
 use faer::Mat;
 
