@@ -617,8 +617,7 @@ pub(super) const SHORTCUTS_FROM: usize = 768;
 
 /// Whether the structured solve may take its shortcuts at all: `STICKSLIP_CONTACT_SHORTCUTS=off`
 /// solves every iteration directly at every size (read once), for a peak to be bracketed
-/// without the shortcuts' lost digit and for comparing the two paths
-/// (`tests/friction_contact.rs`).
+/// without the shortcuts' lost digit and for comparing the two paths (`tests/shortcuts.rs`).
 pub(super) fn shortcuts_allowed() -> bool {
     static ALLOWED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
     *ALLOWED.get_or_init(|| std::env::var("STICKSLIP_CONTACT_SHORTCUTS").as_deref() != Ok("off"))
