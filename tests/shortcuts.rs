@@ -20,17 +20,21 @@ use common::{Table, shipped_case_on, stickslip_env, tempdir};
 use serde_json::{Value, json};
 use std::path::PathBuf;
 
+/// The environment of a run with the shortcuts allowed or not.
+fn setting(shortcuts: bool) -> &'static [(&'static str, &'static str)] {
+    if shortcuts {
+        &[]
+    } else {
+        &[("STICKSLIP_CONTACT_SHORTCUTS", "off")]
+    }
+}
+
 /// Runs `case` with the shortcuts allowed or not; returns (exit status, output directory).
 fn run(name: &str, case: &Value, shortcuts: bool) -> (i32, PathBuf) {
     let dir = tempdir(&format!("shortcuts-{name}-{shortcuts}"));
     let path = dir.join("case.json");
     std::fs::write(&path, serde_json::to_string(case).unwrap()).unwrap();
     let out = dir.join("out");
-    let envs: &[(&str, &str)] = if shortcuts {
-        &[]
-    } else {
-        &[("STICKSLIP_CONTACT_SHORTCUTS", "off")]
-    };
     let (code, _, stderr) = stickslip_env(
         &[
             "run",
@@ -39,7 +43,7 @@ fn run(name: &str, case: &Value, shortcuts: bool) -> (i32, PathBuf) {
             out.to_str().unwrap(),
             "--quiet",
         ],
-        envs,
+        setting(shortcuts),
     );
     assert!(code == 0 || code == 5, "{name}: exit {code}: {stderr}");
     (code, out)
@@ -132,11 +136,6 @@ fn a_state_resumes_only_with_the_shortcut_setting_that_wrote_it() {
     let state = out.join("state_0020.json");
     assert!(state.exists(), "no state at step 20 in {}", out.display());
     let resume = |shortcuts: bool, name: &str| {
-        let envs: &[(&str, &str)] = if shortcuts {
-            &[]
-        } else {
-            &[("STICKSLIP_CONTACT_SHORTCUTS", "off")]
-        };
         let o = dir.join(name);
         let (code, _, stderr) = stickslip_env(
             &[
@@ -148,7 +147,7 @@ fn a_state_resumes_only_with_the_shortcut_setting_that_wrote_it() {
                 state.to_str().unwrap(),
                 "--quiet",
             ],
-            envs,
+            setting(shortcuts),
         );
         (code, stderr, o)
     };
@@ -199,11 +198,11 @@ fn a_sweep_part_goes_on_only_with_the_shortcut_setting_that_wrote_it() {
             envs,
         )
     };
-    let (code, _, stderr) = shard(&[]);
+    let (code, _, stderr) = shard(setting(true));
     assert_eq!(code, 0, "{stderr}");
     let part = out.join("part_0_of_2.jsonl");
     let before = std::fs::read(&part).unwrap();
-    let (code, _, stderr) = shard(&[("STICKSLIP_CONTACT_SHORTCUTS", "off")]);
+    let (code, _, stderr) = shard(setting(false));
     assert_eq!(code, 2, "{stderr}");
     assert!(
         stderr.contains("another sweep") && stderr.contains("STICKSLIP_CONTACT_SHORTCUTS"),
@@ -215,6 +214,6 @@ fn a_sweep_part_goes_on_only_with_the_shortcut_setting_that_wrote_it() {
         "the part was touched"
     );
     // With the setting that wrote it, the shard finds its row done.
-    let (code, _, stderr) = shard(&[]);
+    let (code, _, stderr) = shard(setting(true));
     assert_eq!(code, 0, "{stderr}");
 }
