@@ -22,7 +22,8 @@ pub const FORMAT: u32 = 2;
 #[derive(Serialize, Deserialize)]
 pub struct SavedRun {
     pub format: u32,
-    /// Identity of the case file, its mesh and the program version.
+    /// Identity of the case file, its mesh, the program version and build, and the contact
+    /// solve's path (see [`run_id`]).
     pub id: String,
     /// The candidate gap the model was built with (the zone may have been widened).
     pub candidate_gap: Option<f64>,
@@ -31,7 +32,10 @@ pub struct SavedRun {
     pub energy: Option<EnergySaved>,
 }
 
-/// The identity a state must carry to resume `case` (read from `case_path`).
+/// The identity a state must carry to resume `case` (read from `case_path`): the bytes of the
+/// case file and its mesh, the program version and build (the executable's hash, as the model
+/// cache keys on: another build can take another floating-point path, and the resumed run
+/// would then not be the uninterrupted one), and `STICKSLIP_CONTACT_SHORTCUTS=off` where set.
 pub fn run_id(case: &Case, case_path: &Path) -> Result<String, RunError> {
     let read = |p: &Path| {
         std::fs::read(p).map_err(|e| RunError::Resume {
@@ -42,11 +46,15 @@ pub fn run_id(case: &Case, case_path: &Path) -> Result<String, RunError> {
     // A run without the contact solve's shortcuts takes another path in the last digits: its
     // states resume only without them (the default adds nothing, so earlier states resume).
     let (case_bytes, mesh_bytes) = (read(case_path)?, read(&case.mesh_path(case_path))?);
+    // A program that cannot read its own executable writes states that only its version
+    // identifies (as before builds were part of the identity).
+    let build = crate::cache::build_id().ok().map(u64::to_le_bytes);
     let mut parts: Vec<&[u8]> = vec![
         &case_bytes,
         &mesh_bytes,
         env!("CARGO_PKG_VERSION").as_bytes(),
     ];
+    parts.extend(build.as_ref().map(|b| b.as_slice()));
     parts.extend(crate::contact::solver::path_identity());
     Ok(crate::output::content_id(&parts))
 }
@@ -91,9 +99,9 @@ pub fn load(path: &Path, case: &Case, case_path: &Path) -> Result<SavedRun, RunE
         return Err(bad(
             &file,
             format!(
-                "is the state of another case, mesh or program version, or of a run with another \
-                 STICKSLIP_CONTACT_SHORTCUTS (id {}, this case {id}): resume with the case file \
-                 and the setting that wrote it",
+                "is the state of another case, mesh or program build, or of a run with another \
+                 STICKSLIP_CONTACT_SHORTCUTS (id {}, this case {id}): resume with the case file, \
+                 the program and the setting that wrote it",
                 saved.id
             ),
         ));

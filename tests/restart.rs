@@ -1,8 +1,8 @@
 //! Exact restart: a fretting run (two cycles, L3, a state with every 10th step) killed
 //! part-way and resumed with `--resume DIR`, and one whose files after step 40 were deleted
 //! and resumed from `state_0040.json`, write what the uninterrupted run writes, file for file
-//! and byte for byte apart from the timings; a state from another case, a directory without a
-//! state and a corrupt state are refused with nothing written.
+//! and byte for byte apart from the timings; a state from another case or another build of the
+//! program, a directory without a state and a corrupt state are refused with nothing written.
 
 mod common;
 use common::{mesh_path, shipped_case, stickslip, tempdir, validation_row};
@@ -262,4 +262,57 @@ fn bad_states_are_refused_and_nothing_is_written() {
         );
         assert!(!out.exists(), "{name} wrote output");
     }
+}
+
+#[test]
+fn a_state_written_by_another_build_is_refused() {
+    // Another build of the same version: the program's bytes with one more at the end (it runs
+    // the same; its hash, the build's identity, differs).
+    let dir = tempdir("restart-build");
+    let case = write_case(&dir);
+    let other = dir.join("stickslip-other-build");
+    let mut bytes = std::fs::read(env!("CARGO_BIN_EXE_stickslip")).unwrap();
+    bytes.push(0);
+    std::fs::write(&other, &bytes).unwrap();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&other, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+    let src = dir.join("src");
+    let status = std::process::Command::new(&other)
+        .env("STICKSLIP_NO_CACHE", "1")
+        .args([
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            src.to_str().unwrap(),
+        ])
+        .arg("--quiet")
+        .status()
+        .unwrap();
+    assert!(status.success(), "the other build's run: {status}");
+    let state = src.join("state_0040.json");
+    let out = dir.join("out");
+    let (code, err) = run(&case, &out, &["--resume", state.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("program build") && err.contains("--resume"),
+        "{err}"
+    );
+    assert!(!out.exists(), "a refused resume wrote output");
+    // The build that wrote it resumes it.
+    let again = dir.join("again");
+    let status = std::process::Command::new(&other)
+        .env("STICKSLIP_NO_CACHE", "1")
+        .args([
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            again.to_str().unwrap(),
+        ])
+        .args(["--resume", state.to_str().unwrap(), "--quiet"])
+        .status()
+        .unwrap();
+    assert!(status.success(), "the other build's resume: {status}");
 }
