@@ -119,7 +119,7 @@ def main():
                          f", first step iterations {first(ha)}/{first(hb)}")
                 qb = (sb.get("friction") or {}).get("q_max")
                 qa = (sa.get("friction") or {}).get("q_max")
-                if qa is not None and qb is not None and qa != qb:
+                if qa is not None and qb is not None and qa != qb and qa != 0:
                     line += f", Q_max {qa:.9g}/{qb:.9g} ({(qb - qa) / abs(qa):+.1e})"
             elif (ra[1] is None) != (rb[1] is None):
                 same = False

@@ -124,7 +124,7 @@ pub enum SweepError {
     Shard { spec: String, why: String },
     #[error(
         "{path} belongs to another sweep (sweep id {found}, this one {expected}: the case, its \
-         mesh, the sweep file, the program or STICKSLIP_CONTACT_SHORTCUTS changed); use another \
+         mesh, the sweep file, the program's build or STICKSLIP_CONTACT_SHORTCUTS changed); use another \
          --out, or --fresh to discard it"
     )]
     ForeignPart {

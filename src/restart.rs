@@ -43,11 +43,10 @@ pub fn run_id(case: &Case, case_path: &Path) -> Result<String, RunError> {
             why: format!("cannot read it: {e}"),
         })
     };
-    // A run without the contact solve's shortcuts takes another path in the last digits: its
-    // states resume only without them (the default adds nothing, so earlier states resume).
     let (case_bytes, mesh_bytes) = (read(case_path)?, read(&case.mesh_path(case_path))?);
     // A program that cannot read its own executable writes states that only its version
-    // identifies (as before builds were part of the identity).
+    // identifies (as before builds were part of the identity). States of every earlier build,
+    // those written before the build was part of the identity included, are refused.
     let build = crate::cache::build_id().ok().map(u64::to_le_bytes);
     let mut parts: Vec<&[u8]> = vec![
         &case_bytes,
@@ -55,6 +54,8 @@ pub fn run_id(case: &Case, case_path: &Path) -> Result<String, RunError> {
         env!("CARGO_PKG_VERSION").as_bytes(),
     ];
     parts.extend(build.as_ref().map(|b| b.as_slice()));
+    // A run without the contact solve's shortcuts takes another path in the last digits: its
+    // states resume only without them.
     parts.extend(crate::contact::solver::path_identity());
     Ok(crate::output::content_id(&parts))
 }

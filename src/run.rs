@@ -67,15 +67,15 @@ pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
         .transpose()?;
     let (mut gap, doublings) = (resume.as_ref().and_then(|s| s.candidate_gap), 8);
     let store = crate::cache::Store::resolve(&opts.cache, opts.level() >= LogLevel::Warn);
-    // The run's identity (a hash of the case and mesh files, which the restart states carry:
-    // 25 ms at L7), and the program's for the model cache, on a thread of their own while the
-    // model is built, whose first phases leave a core idle.
+    // The run's identity (a hash of the case and mesh files and the program's build, which the
+    // restart states carry: 25 ms at L7, the executable's 5 ms), on a thread of their own while
+    // the model is built, whose first phases leave a core idle.
     let case = &case;
     std::thread::scope(|scope| {
         let cached = store.is_ok();
         let mut id_job = Some(scope.spawn(move || {
-            // The program's identity for the model cache's key (reading and hashing the
-            // executable, 5 ms), before the main thread asks for it.
+            // The program's identity (reading and hashing the executable, 5 ms) for the model
+            // cache's key before the main thread asks for it; the run id reads it too.
             if cached {
                 let _ = crate::cache::build_id();
             }

@@ -143,11 +143,12 @@ fn sweep_over_loads_with_the_case_law() {
 /// their factorised Delassus blocks (on L3 the structured contact solve factorises them), so
 /// this holds only if sharing changes no arithmetic.
 ///
-/// On L3 and on L4, whose 514 contact unknowns are enough for a first contact to start from
-/// the frictionless problem and Hertz's contact set (`NORMAL_FIRST_FROM`), shared by the rows.
+/// On L3; on L4, whose 514 contact unknowns are enough for a first contact to start from
+/// the frictionless problem and Hertz's contact set (`NORMAL_FIRST_FROM`), shared by the rows;
+/// and on L5, whose 1 018 take the structured solve's shortcuts.
 #[test]
 fn sweep_rows_are_bit_for_bit_the_single_runs_of_their_laws() {
-    for mesh in ["vm272_L3.msh", "vm272_L4.msh"] {
+    for mesh in ["vm272_L3.msh", "vm272_L4.msh", "vm272_L5.msh"] {
         rows_are_their_single_runs(mesh);
     }
 }

@@ -249,6 +249,7 @@ pub fn write_table(
         "case": header["case"],
         "sweep": header["sweep"],
         "sweep_id": header["sweep_id"],
+        "contact_shortcuts_from": header["contact_shortcuts_from"],
         "build_s": sum("build_s"),
         "sweep_s": sum("sweep_s"),
         "threads": threads,

@@ -50,7 +50,7 @@ pub fn shortcuts_from() -> Option<usize> {
 }
 
 /// What a run's identity (a restart state's, a sweep part's) adds for the contact-solve path:
-/// nothing by default (earlier identities stay valid), a marker with the shortcuts off.
+/// nothing by default, a marker with the shortcuts off.
 pub fn path_identity() -> Option<&'static [u8]> {
     shortcuts_from()
         .is_none()
