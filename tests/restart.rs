@@ -279,18 +279,23 @@ fn a_state_written_by_another_build_is_refused() {
         use std::os::unix::fs::PermissionsExt;
         std::fs::set_permissions(&other, std::fs::Permissions::from_mode(0o755)).unwrap();
     }
+    // `stickslip run CASE --out OUT --quiet EXTRA…` with the other build.
+    let with_other = |out: &Path, extra: &[&str]| {
+        std::process::Command::new(&other)
+            .env("STICKSLIP_NO_CACHE", "1")
+            .args([
+                "run",
+                case.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .arg("--quiet")
+            .args(extra)
+            .status()
+            .unwrap()
+    };
     let src = dir.join("src");
-    let status = std::process::Command::new(&other)
-        .env("STICKSLIP_NO_CACHE", "1")
-        .args([
-            "run",
-            case.to_str().unwrap(),
-            "--out",
-            src.to_str().unwrap(),
-        ])
-        .arg("--quiet")
-        .status()
-        .unwrap();
+    let status = with_other(&src, &[]);
     assert!(status.success(), "the other build's run: {status}");
     let state = src.join("state_0040.json");
     let out = dir.join("out");
@@ -302,17 +307,6 @@ fn a_state_written_by_another_build_is_refused() {
     );
     assert!(!out.exists(), "a refused resume wrote output");
     // The build that wrote it resumes it.
-    let again = dir.join("again");
-    let status = std::process::Command::new(&other)
-        .env("STICKSLIP_NO_CACHE", "1")
-        .args([
-            "run",
-            case.to_str().unwrap(),
-            "--out",
-            again.to_str().unwrap(),
-        ])
-        .args(["--resume", state.to_str().unwrap(), "--quiet"])
-        .status()
-        .unwrap();
+    let status = with_other(&dir.join("again"), &["--resume", state.to_str().unwrap()]);
     assert!(status.success(), "the other build's resume: {status}");
 }
