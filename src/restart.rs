@@ -43,21 +43,24 @@ pub fn run_id(case: &Case, case_path: &Path) -> Result<String, RunError> {
             why: format!("cannot read it: {e}"),
         })
     };
+    // States of every earlier build, those written before the build was part of the identity
+    // included, are refused.
     let (case_bytes, mesh_bytes) = (read(case_path)?, read(&case.mesh_path(case_path))?);
-    // A program that cannot read its own executable writes states that only its version
-    // identifies (as before builds were part of the identity). States of every earlier build,
-    // those written before the build was part of the identity included, are refused.
+    Ok(program_identity(&[&case_bytes, &mesh_bytes]))
+}
+
+/// The content id of `inputs` and of the program that computes from them: its version, its
+/// build (the executable's hash, as the model cache keys on: another build can take another
+/// floating-point path) and `STICKSLIP_CONTACT_SHORTCUTS=off` where set (another path in the
+/// last digits). Restart states and sweep parts carry it. A program that cannot read its own
+/// executable gives an id of its version alone (as before builds were part of it).
+pub fn program_identity(inputs: &[&[u8]]) -> String {
     let build = crate::cache::build_id().ok().map(u64::to_le_bytes);
-    let mut parts: Vec<&[u8]> = vec![
-        &case_bytes,
-        &mesh_bytes,
-        env!("CARGO_PKG_VERSION").as_bytes(),
-    ];
+    let mut parts: Vec<&[u8]> = inputs.to_vec();
+    parts.push(env!("CARGO_PKG_VERSION").as_bytes());
     parts.extend(build.as_ref().map(|b| b.as_slice()));
-    // A run without the contact solve's shortcuts takes another path in the last digits: its
-    // states resume only without them.
     parts.extend(crate::contact::solver::path_identity());
-    Ok(crate::output::content_id(&parts))
+    crate::output::content_id(&parts)
 }
 
 /// The file name of the state of `step`.

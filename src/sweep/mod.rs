@@ -104,20 +104,11 @@ pub fn run(case_path: &Path, sweep_path: &Path, opts: &SweepOptions) -> Result<(
     }
     let (k, n) = opts.shard.unwrap_or((0, 1));
     let total = rows.len();
+    // With the program's build and contact path, as a restart state's: rows of another build
+    // or path can differ in the last digits, and the merged table must be the one an unsharded
+    // sweep writes.
     let (case_bytes, mesh_bytes) = (read(case_path)?, read(&case.mesh_path(case_path))?);
-    // The program's build too (as a restart state's identity): rows of another build can differ
-    // in the last digits, and the merged table must be the one an unsharded sweep writes.
-    let build = crate::cache::build_id().ok().map(u64::to_le_bytes);
-    let mut id_parts: Vec<&[u8]> = vec![
-        &case_bytes,
-        &mesh_bytes,
-        &sweep_bytes,
-        env!("CARGO_PKG_VERSION").as_bytes(),
-    ];
-    id_parts.extend(build.as_ref().map(|b| b.as_slice()));
-    // Rows solved without the contact solve's shortcuts are another sweep's.
-    id_parts.extend(crate::contact::solver::path_identity());
-    let id = crate::output::content_id(&id_parts);
+    let id = crate::restart::program_identity(&[&case_bytes, &mesh_bytes, &sweep_bytes]);
     let out_dir = opts.out.clone().unwrap_or_else(|| {
         PathBuf::from("out").join(format!(
             "{}_sweep",
