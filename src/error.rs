@@ -39,6 +39,26 @@ pub enum StepError {
     Free { body: String, axis: &'static str },
     #[error("the solution is not finite")]
     NotFinite,
+    #[error(
+        "stage {stage} took its budget of {budget} steps ({steps} nominal) and reached {:.6} of \
+         its load: the increments stayed small (see the cutbacks in history.csv); give the \
+         stage more steps or look at why its steps fail",
+        reached
+    )]
+    StepBudget {
+        stage: usize,
+        budget: usize,
+        steps: usize,
+        reached: f64,
+    },
+    #[error(
+        "the stage drives pilot_x = {q:e} and pilot_y = {p:e} together from no load: it asks for \
+         Q/P = {:.6} at every load, above the largest friction coefficient {mu:.6} of the law, so \
+         no load of it has an equilibrium; apply the normal load in a stage of its own first, or \
+         lower the tangential force",
+        (q / p).abs()
+    )]
+    BeyondFriction { q: f64, p: f64, mu: f64 },
 }
 
 /// A step that failed for good: its number, why, and the cutbacks tried first.

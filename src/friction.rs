@@ -538,6 +538,19 @@ impl FrictionLaw {
         self.mu(0.0)
     }
 
+    /// The largest coefficient over all slips, `max_u f(u)`: `f_s` for the parametric shapes
+    /// (`f_s ≥ f_d` or not), the largest tabulated value for a table (piecewise linear, so its
+    /// maximum is at a row).
+    pub fn mu_max(&self) -> f64 {
+        match *self {
+            FrictionLaw::Constant { mu } => mu,
+            FrictionLaw::Ramp { fs, fd, .. }
+            | FrictionLaw::Step { fs, fd, .. }
+            | FrictionLaw::Exponential { fs, fd, .. } => fs.max(fd),
+            FrictionLaw::Table(ref t) => t.rows().iter().map(|r| r[1]).fold(f64::MIN, f64::max),
+        }
+    }
+
     /// Dynamic coefficient `f_d = lim f(u)`, u → ∞. Errors for a table whose last segment is
     /// still sloped ([`FrictionError::TableNotSettled`]).
     pub fn f_dynamic(&self) -> Result<f64, FrictionError> {

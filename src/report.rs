@@ -41,7 +41,15 @@ pub struct FrictionSummary {
     /// radius R (fitted to the initial gap, g0 ≈ t²/2R) and Hertz semi-width a.
     pub load: f64,
     pub radius: f64,
-    pub a_hertz: f64,
+    /// The relative RMS residual of that fit (see [`crate::checks::fit_radius`]) and whether
+    /// the profile counts as Hertzian (`profile_rms ≤` [`crate::checks::HERTZ_PROFILE_LIMIT`]
+    /// with a finite positive R). Where it does not, no closed form of the paper applies: `a_hertz`,
+    /// Λ, χ, Ψ, s0 and the predicted Q_max/P are absent and `not_hertzian` says why.
+    pub profile_rms: f64,
+    pub hertzian: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_hertzian: Option<String>,
+    pub a_hertz: Option<f64>,
     pub lambda: Option<f64>,
     pub chi: Option<f64>,
     pub psi: Option<f64>,
@@ -198,11 +206,17 @@ pub fn end_summary(case_path: &Path, s: &Summary, out_dir: &Path, stem: &str) ->
                 .last()
                 .and_then(|r| r.pilot)
                 .is_some_and(|p| p.fx.abs() < f.q_max - 1e-9 * f.q_max.max(1.0));
+        let theory = match &f.not_hertzian {
+            Some(why) if f.apparent_friction_jkr.is_none() => format!("no closed form: {why}"),
+            _ => format!(
+                "JKR {}, double C–M {}",
+                opt(f.apparent_friction_jkr),
+                opt(f.apparent_friction_dcm)
+            ),
+        };
         o += &format!(
-            "  Q_max/P   {} (JKR {}, double C–M {}){}\n",
+            "  Q_max/P   {} ({theory}){}\n",
             format_args!("{:.5}", f.apparent_friction),
-            opt(f.apparent_friction_jkr),
-            opt(f.apparent_friction_dcm),
             if peaked {
                 ": the peak was reached"
             } else {
@@ -267,35 +281,42 @@ pub fn friction_summary(
     let n0 = cm.pair.common_normal.unwrap_or([0.0, 1.0]);
     let load = (fig.fx * n0[0] + fig.fy * n0[1]).abs();
     // Effective radius from the initial gaps of the zone nodes: g0 ≈ t²/(2R), t along the face.
-    let (radius, x0, tau, _) = crate::checks::fit_radius(model, None)?;
-    let a_hertz = crate::checks::hertz_a(load, radius, cm.e_star);
+    let (radius, x0, tau, rms) = crate::checks::fit_radius(model, None)?;
+    let not_hertzian = crate::checks::not_hertzian(radius, rms);
+    let a_hertz = not_hertzian
+        .is_none()
+        .then(|| crate::checks::hertz_a(load, radius, cm.e_star));
     let fs = law.f_static();
     let fd = law.f_dynamic().ok();
     let weakening = fd.filter(|fd| fs > *fd);
     let delta = weakening.and_then(|_| law.delta().ok());
     let w_over_p = weakening.and_then(|_| law.w_over_p().ok());
-    let lambda = match (weakening, delta) {
-        (Some(fd), Some(d)) if a_hertz > 0.0 => Some(radius * d / ((fs - fd) * a_hertz * a_hertz)),
+    let lambda = match (weakening, delta, a_hertz) {
+        (Some(fd), Some(d), Some(a)) if a > 0.0 => Some(radius * d / ((fs - fd) * a * a)),
         _ => None,
     };
     let ratio = weakening.map(|fd| fs / fd - 1.0);
     let chi = lambda.zip(ratio).map(|(l, r)| r * l);
     let psi = lambda.zip(ratio).map(|(l, r)| r * r * l);
     let s0_over_a = lambda.map(|l| 2.0 * l / std::f64::consts::PI);
+    // The contact's half-width: Hertz's where it applies, else the one computed.
+    let half_width = a_hertz.unwrap_or(fig.a);
     let h_contact = cm
         .pair
         .zone_edges
         .iter()
         .filter(|e| {
             let x = model.mesh.nodes[e[2]];
-            ((x[0] - x0[0]) * tau[0] + (x[1] - x0[1]) * tau[1]).abs() <= a_hertz
+            ((x[0] - x0[0]) * tau[0] + (x[1] - x0[1]) * tau[1]).abs() <= half_width
         })
         .map(|e| {
             let (p, q) = (model.mesh.nodes[e[0]], model.mesh.nodes[e[1]]);
             (p[0] - q[0]).hypot(p[1] - q[1])
         })
         .fold(0.0, f64::max);
-    let resolved = s0_over_a.map(|s| h_contact <= 0.5 * s * a_hertz);
+    let resolved = s0_over_a
+        .zip(a_hertz)
+        .map(|(s, a)| h_contact <= 0.5 * s * a);
     // Closed-form apparent friction Q_max/P (eqs. QJKR and Qx at their maxima, Fig. 6).
     let closed = match (weakening, chi) {
         (Some(fd), Some(chi)) => crate::analytic::apparent::apparent(chi, fs / fd, true)
@@ -303,13 +324,10 @@ pub fn friction_summary(
             .map(|p| (p.q_max_jkr * fd, p.q_max_dcm.map(|q| q * fd))),
         _ => None,
     };
-    let apparent_friction_jkr = closed
-        .map(|c| c.0)
-        .or(if weakening.is_none() { fd } else { None });
-    let apparent_friction_dcm =
-        closed
-            .and_then(|c| c.1)
-            .or(if weakening.is_none() { fd } else { None });
+    // Constant friction: Q_max = f P whatever the profile.
+    let constant = if weakening.is_none() { fd } else { None };
+    let apparent_friction_jkr = closed.map(|c| c.0).or(constant);
+    let apparent_friction_dcm = closed.and_then(|c| c.1).or(constant);
     Some(FrictionSummary {
         law,
         f_s: fs,
@@ -318,6 +336,9 @@ pub fn friction_summary(
         w_over_p,
         load,
         radius,
+        profile_rms: rms,
+        hertzian: not_hertzian.is_none(),
+        not_hertzian,
         a_hertz,
         lambda,
         chi,
@@ -526,7 +547,7 @@ pub fn print_warnings(summary: &Summary, show: bool) {
         eprintln!(
             "warning: the contact elements (h = {:.3e}) are larger than s0/2 = {:.3e}: the slip-weakening transition zone is not resolved; use a finer mesh along the faces",
             fr.h_contact,
-            fr.s0_over_a.unwrap_or(0.0) * fr.a_hertz / 2.0
+            fr.s0_over_a.unwrap_or(0.0) * fr.a_hertz.unwrap_or(0.0) / 2.0
         );
     }
     for c in &summary.checks {

@@ -4,7 +4,7 @@
 
 use crate::case::Case;
 pub use crate::driver::{
-    LogLevel, MAX_CUTBACKS, Restart, Simulation, StepEvent, simulate, simulate_with,
+    LogLevel, MAX_CUTBACKS, Restart, STEP_BUDGET, STEP_BUDGET_MIN, step_budget, Simulation, StepEvent, simulate, simulate_with,
 };
 use crate::energy::EnergyMeter;
 pub use crate::error::RunError;
@@ -177,6 +177,7 @@ pub fn run_model(
     let progress = Progress::new(case, level);
     let law = model.friction.clone();
     let mut series = Series::new(&model, out_dir, &stem, case.output.compress);
+    series.contact_csv = case.output.contact_csv;
     let mut energy = case.tracks_energy().then(|| EnergyMeter::new(&model));
     let candidate_gap = model.contact.as_ref().map(|c| c.pair.candidate_gap);
     let mut from = None;
@@ -193,7 +194,7 @@ pub fn run_model(
         from,
     };
     // The steps are written on a thread of their own while the next ones are solved.
-    let (summarised, history, solve_s, t_write, t_wait) = std::thread::scope(|scope| {
+    let (summarised, history, solve_s, t_write, t_wait, bracket_attempts) = std::thread::scope(|scope| {
         let mut writer = Background::spawn(scope, series);
         // The last converged step not yet written (`output.every` > 1).
         let mut unwritten: Option<StepOutput> = None;
@@ -205,7 +206,20 @@ pub fn run_model(
             if let Some(m) = energy.as_mut() {
                 m.step(&model, ev);
             }
+            // Written: the nominal steps `output.every` picks and the last one, and with
+            // `output.substeps` the sub-steps of cutbacks between them too.
+            let picked = ev.last
+                || match ev.nominal {
+                    Some(k) => k.is_multiple_of(case.output.every),
+                    None => case.output.substeps,
+                };
             if !case.output.vtu {
+                if picked
+                    && case.output.contact_csv
+                    && let Some(st) = ev.contact
+                {
+                    crate::output::series::write_contact_csv(&model, out_dir, ev.step, st)?;
+                }
                 return Ok(());
             }
             // A write that failed stops the run at its next step.
@@ -238,7 +252,7 @@ pub fn run_model(
                     energy: energy.as_ref().map(EnergyMeter::saved),
                 }),
             };
-            if ev.step.is_multiple_of(case.output.every) || ev.last {
+            if picked {
                 unwritten = None;
                 writer.send(out)
             } else {
@@ -311,12 +325,13 @@ pub fn run_model(
         }
         crate::trace::mark("simulated");
         let solve_s = sim.solve_s;
+        let bracket_attempts = sim.bracket_attempts;
         let history = history_csv(&sim.records);
         let summarised = summarise(&model, case, case_path, out_dir, sim);
         crate::trace::mark("summarised");
         let (t_write, t_wait) = writer.finish()?;
         crate::trace::mark("writer done");
-        Ok((summarised, history, solve_s, t_write, t_wait))
+        Ok((summarised, history, solve_s, t_write, t_wait, bracket_attempts))
     })?;
     progress.finish();
     write_file(&out_dir.join("history.csv"), history.as_bytes())?;
@@ -345,7 +360,7 @@ pub fn run_model(
         return Err(RunError::EquilibriumLost {
             q_max,
             q_fail,
-            cutbacks: MAX_CUTBACKS,
+            cutbacks: bracket_attempts,
             local_peak,
         });
     }

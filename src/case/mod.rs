@@ -211,9 +211,17 @@ pub struct Output {
     /// Write `.vtu` files and the `.pvd` series.
     #[serde(default = "yes")]
     pub vtu: bool,
-    /// Write every n-th step (the last step is always written).
+    /// Write every n-th nominal step (the last step is always written). Steps land on the
+    /// nominal loads of their stage whatever the cutbacks between them.
     #[serde(default = "one")]
     pub every: usize,
+    /// Also write the sub-steps that cutbacks insert between two nominal steps. Default: off.
+    #[serde(default)]
+    pub substeps: bool,
+    /// Write the contact table `contact_NNNN.csv` with each written step (with or without the
+    /// `.vtu` files). Default: on.
+    #[serde(default = "yes")]
+    pub contact_csv: bool,
     /// Compress the arrays of the `.vtu` files (zlib, one block per array): smaller files,
     /// slower to write. Default: raw binary.
     #[serde(default)]
@@ -239,6 +247,8 @@ impl Default for Output {
             dir: None,
             vtu: true,
             every: 1,
+            substeps: false,
+            contact_csv: true,
             compress: false,
             energy: None,
         }

@@ -6,7 +6,7 @@
 mod unheld;
 
 use crate::case::{Case, Control, Stage};
-use crate::contact::solver::{self, State, Status};
+use crate::contact::solver::{self, ContactError, State, Status};
 use crate::error::{RunError, StepError, StepFailure};
 use crate::friction::FrictionLaw;
 use crate::model::Model;
@@ -16,8 +16,28 @@ use crate::report::StepRecord;
 use std::time::Instant;
 use unheld::{unheld_after, unheld_before};
 
-/// Halvings of a load increment before a step is given up.
-pub const MAX_CUTBACKS: usize = 12;
+/// Halvings of a stage's nominal increment before a step is given up: no increment is smaller
+/// than the nominal one over `2^MAX_CUTBACKS`, so a lost equilibrium is bracketed to within
+/// `2^(1 − MAX_CUTBACKS)` of a nominal step (2e-6 of it; see [`Driver::run_stage`]).
+pub const MAX_CUTBACKS: usize = 20;
+
+/// A stage accepts at most `STEP_BUDGET` times its nominal steps, and at least
+/// `STEP_BUDGET_MIN` steps (room for the bracketing of a peak in a stage of one step), after
+/// which the run stops with [`StepError::StepBudget`] and keeps its last converged state.
+pub const STEP_BUDGET: usize = 10;
+pub const STEP_BUDGET_MIN: usize = 50;
+
+/// The step budget of a stage of `steps` nominal steps.
+pub fn step_budget(steps: usize) -> usize {
+    (STEP_BUDGET * steps).max(STEP_BUDGET_MIN)
+}
+
+/// The index `k` of the first nominal fraction `k / steps` above `alpha` (a fraction reached
+/// exactly counts as passed).
+fn next_nominal(alpha: f64, steps: usize) -> usize {
+    let k = (alpha * steps as f64).floor() as usize;
+    if (k as f64 / steps as f64) <= alpha { k + 1 } else { k }
+}
 
 /// How much a run prints to standard error.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, clap::ValueEnum)]
@@ -36,6 +56,9 @@ pub struct StepEvent<'a> {
     pub scale: f64,
     /// Whether this is the last step of the last stage.
     pub last: bool,
+    /// The case's nominal step (counted over all stages, from 1) this step lands on; `None` for
+    /// a sub-step between two nominal loads (after a cutback).
+    pub nominal: Option<usize>,
     /// The free solution, where the step computed it (runs without contact).
     pub u: Option<&'a Vec<f64>>,
     /// The contact state (runs with contact; the full field is recovered on demand).
@@ -54,6 +77,8 @@ pub struct Simulation {
     /// (Q_max, the load at which no equilibrium was found) when a force-controlled tangential
     /// load passed the peak.
     pub lost_equilibrium: Option<(f64, f64)>,
+    /// The failed attempts that bracketed the lost equilibrium.
+    pub bracket_attempts: usize,
     pub newton_iterations: usize,
     /// Dense factorisations and GMRES iterations of the contact Newton solves.
     pub lu_factorisations: usize,
@@ -161,6 +186,7 @@ pub fn simulate_with(
         failure: None,
         bracket: None,
         lost_equilibrium: None,
+        bracket_attempts: 0,
         last_u: None,
         checkpoint_every: restart.every,
     };
@@ -174,6 +200,7 @@ pub fn simulate_with(
     Ok(Simulation {
         failure: d.failure,
         lost_equilibrium: d.lost_equilibrium,
+        bracket_attempts: d.bracket_attempts,
         newton_iterations: d.newton_total,
         lu_factorisations: d.lu_cache.factorisations,
         gmres_iterations: d.lu_cache.gmres_iterations,
@@ -258,6 +285,7 @@ struct Driver<'a> {
     /// The last converged tangential force and the first that failed, while cutbacks bisect.
     bracket: Option<(f64, f64)>,
     lost_equilibrium: Option<(f64, f64)>,
+    bracket_attempts: usize,
     last_u: Option<Vec<f64>>,
     checkpoint_every: Option<usize>,
 }
@@ -268,6 +296,17 @@ type StagePosition = (StageStart, f64, f64, Option<(f64, State)>);
 
 impl Driver<'_> {
     /// Runs the steps of stage `si`; `false` when the run stops (a failure is recorded).
+    ///
+    /// The stage's load fraction `α` runs from 0 to 1. A step aims at the next nominal fraction
+    /// `k / steps` (or less, after a cutback), so the nominal loads are reached exactly whatever
+    /// the cutbacks on the way. A failed attempt at `α_f` halves the increment and makes `α_f`
+    /// the bracket's upper end: later attempts go no further than `α_f` until one reaches it.
+    /// Invariants that bound the loop:
+    /// * an increment is never below `Δα_min = (1/steps) / 2^MAX_CUTBACKS`: a failure that
+    ///   would need a smaller one ends the stage (a lost equilibrium under force control,
+    ///   bracketed to within `2 Δα_min` of the stage, else a failed step);
+    /// * every accepted step advances `α` by at least `Δα_min / 2`;
+    /// * a stage accepts at most [`step_budget`] steps.
     fn run_stage(
         &mut self,
         si: usize,
@@ -276,6 +315,7 @@ impl Driver<'_> {
         resume: Option<StagePosition>,
     ) -> Result<bool, RunError> {
         let nominal = 1.0 / stage.steps as f64;
+        let d_min = nominal / (1u64 << MAX_CUTBACKS) as f64;
         // The state before the last converged one, with its load fraction (none across stages).
         let (start, mut alpha, mut dalpha, mut older) = resume.unwrap_or((
             StageStart {
@@ -289,18 +329,48 @@ impl Driver<'_> {
             None,
         ));
         let target = [stage.pilot_x, stage.pilot_y];
+        if alpha == 0.0
+            && let Some(why) = self.beyond_friction_throughout(&start, target, stage)
+        {
+            return Ok(self.stop(self.records.len() + 1, why, None));
+        }
+        // The next nominal fraction to reach: `k_next / steps`.
+        let mut k_next = next_nominal(alpha, stage.steps);
+        // The lowest fraction that failed since the last one reached (the bracket's upper
+        // end) and the failed attempts since it was set.
+        let mut upper: Option<f64> = None;
+        let mut attempts = 0usize;
         let mut cutbacks = 0;
+        let budget = step_budget(stage.steps);
+        let first_step = self.records.len();
+        let taken_before = self.records.iter().filter(|r| r.stage == si).count();
         // A stage that changes no load (a hold): every step of it keeps the converged state.
         let hold = start.is_hold(target, stage.traction_scale);
-        while alpha < 1.0 - 1e-12 {
-            let a_new = (alpha + dalpha).min(1.0);
+        while k_next <= stage.steps {
+            let goal = k_next as f64 / stage.steps as f64;
+            let mut a_new = alpha + dalpha;
+            if goal - a_new < 0.5 * d_min {
+                a_new = goal;
+            }
+            if let Some(u) = upper {
+                a_new = a_new.min(u);
+            }
+            let step = self.records.len() + 1;
+            if taken_before + (step - 1 - first_step) >= budget {
+                let why = StepError::StepBudget {
+                    stage: si,
+                    budget,
+                    steps: stage.steps,
+                    reached: alpha,
+                };
+                return Ok(self.stop(step, why, None));
+            }
             let t = Instant::now();
             let sc = match stage.traction_scale {
                 Some(v) => start.scale + a_new * (v - start.scale),
                 None => start.scale,
             };
             let ctl = start.control_at(target, a_new);
-            let step = self.records.len() + 1;
             if let Some(why) = unheld_before(self.model, self.case, &ctl) {
                 return Ok(self.stop(step, why, None));
             }
@@ -332,10 +402,19 @@ impl Driver<'_> {
                     // Failed attempts count in the solve time too (they can dominate a run
                     // that brackets Q_max).
                     self.t_solve += t.elapsed().as_secs_f64();
-                    self.note_failed_load(ctl, target[0]);
-                    if cutbacks < MAX_CUTBACKS {
-                        cutbacks += 1;
-                        dalpha *= 0.5;
+                    let bracketing = self.note_failed_load(ctl, target[0]);
+                    // A singular system that is not the loss of a force-controlled tangential
+                    // equilibrium (a free direction): no smaller step cures it.
+                    if !bracketing
+                        && matches!(e, StepError::Contact(ContactError::Singular { .. }))
+                    {
+                        return Ok(self.stop(step, e, None));
+                    }
+                    attempts += 1;
+                    cutbacks += 1;
+                    upper = Some(a_new);
+                    dalpha = 0.5 * (a_new - alpha);
+                    if dalpha >= d_min {
                         if !self.quiet {
                             eprintln!(
                                 "step {step} of stage {si}: {e}; cutting the load increment back to {dalpha:.3e} of the stage"
@@ -343,14 +422,25 @@ impl Driver<'_> {
                         }
                         continue;
                     }
-                    self.lost_equilibrium = self.bracket;
-                    return Ok(self.stop(step, e, Some(MAX_CUTBACKS)));
+                    if self.bracket.is_some() {
+                        self.lost_equilibrium = self.bracket;
+                        self.bracket_attempts = attempts;
+                    }
+                    return Ok(self.stop(step, e, Some(attempts)));
                 }
             };
             if !self.finite(u.as_ref()) {
                 return Ok(self.stop(step, StepError::NotFinite, None));
             }
             alpha = a_new;
+            if alpha == goal {
+                k_next += 1;
+            }
+            if upper.is_some_and(|u| alpha >= u) {
+                upper = None;
+                attempts = 0;
+                self.bracket = None;
+            }
             self.control = ctl;
             self.scale = sc;
             if let Some(p) = p {
@@ -358,7 +448,7 @@ impl Driver<'_> {
             }
             let wall = t.elapsed().as_secs_f64();
             self.t_solve += wall;
-            let last = si + 1 == self.case.stages.len() && alpha >= 1.0 - 1e-12;
+            let last = si + 1 == self.case.stages.len() && k_next > stage.steps;
             self.record(si, alpha, iterations, cutbacks, wall);
             // The cutback count is per step: the next step starts afresh.
             cutbacks = 0;
@@ -369,12 +459,14 @@ impl Driver<'_> {
             if has_u {
                 self.last_u = u;
             }
-            let checkpoint = self
-                .checkpoint_every
-                .filter(|n| step.is_multiple_of(*n) || last)
-                .map(|_| Checkpoint {
-                    // A resumed run starts from the factorisations it can rebuild bit for bit:
-                    // so does this one.
+            // The contact solver carries to the next step only what a checkpoint records, at
+            // every step, so the answers do not depend on which steps are written.
+            self.lu_cache.end_step();
+            // The case's nominal step this step completes, if it lands on one: only those are
+            // checkpoints (and written, unless the case asks for every sub-step).
+            let nominal_index = (alpha == goal).then(|| k_next - 1 + self.nominal_before(si));
+            let checkpoint = match (self.checkpoint_every, nominal_index) {
+                (Some(n), Some(k)) if k.is_multiple_of(n) || last => Some(Checkpoint {
                     contact_block: self.lu_cache.checkpoint(),
                     stage: si,
                     start,
@@ -393,12 +485,15 @@ impl Driver<'_> {
                     last_u: self.last_u.clone(),
                     t_solve: self.t_solve,
                     t_contact: self.t_contact,
-                });
+                }),
+                _ => None,
+            };
             on_step(&StepEvent {
                 step,
                 time: si as f64 + alpha,
                 scale: sc,
                 last,
+                nominal: nominal_index,
                 u: if has_u { self.last_u.as_ref() } else { None },
                 contact: self.cstate.as_ref(),
                 record: self.records.last().expect("pushed above"),
@@ -408,6 +503,35 @@ impl Driver<'_> {
         Ok(true)
     }
 
+    /// Nominal steps of the stages before `si`.
+    fn nominal_before(&self, si: usize) -> usize {
+        self.case.stages[..si].iter().map(|s| s.steps).sum()
+    }
+
+    /// A stage that starts unloaded and drives both pilot forces in proportion, asking for a
+    /// tangential force above the largest friction coefficient times the normal force at every
+    /// load of the stage: Coulomb's law gives no equilibrium anywhere on it (the pilot is the
+    /// only load of its body, and the contact's resultant is the pilot's force).
+    fn beyond_friction_throughout(
+        &self,
+        start: &StageStart,
+        target: [Option<Control>; 2],
+        stage: &Stage,
+    ) -> Option<StepError> {
+        let law = self.law.as_ref()?;
+        let (Some(Control::Force(q)), Some(Control::Force(f))) = (target[0], target[1]) else {
+            return None;
+        };
+        let unloaded = start.pilot.fx == 0.0 && start.pilot.fy == 0.0 && self.records.is_empty();
+        let loaded_otherwise = start.scale != 0.0 || stage.traction_scale.is_some_and(|v| v != 0.0);
+        let mu = law.mu_max();
+        (unloaded && !loaded_otherwise && self.model.dofs.pilot.is_some() && q.abs() > mu * f.abs())
+            .then_some(StepError::BeyondFriction {
+                q,
+                p: f,
+                mu,
+            })
+    }
     /// One contact solve from the committed state `prev` to the fraction `a.1` of the stage
     /// (from `a.0`), with a predictor from the state `older` before it.
     fn contact_attempt(
@@ -492,13 +616,16 @@ impl Driver<'_> {
     /// between the last converged load and this one; a failure that survives all of them is
     /// reported as the loss of equilibrium. (Only when the step raised that load: a step that
     /// failed at the load of the last converged one is a solver failure, not a peak.)
-    fn note_failed_load(&mut self, ctl: [Control; 2], target_x: Option<Control>) {
+    /// Returns whether the failure is such a load.
+    fn note_failed_load(&mut self, ctl: [Control; 2], target_x: Option<Control>) -> bool {
         if let (Control::Force(f), Some(Control::Force(_)), true) =
             (ctl[0], target_x, self.law.is_some())
             && ctl[0] != self.control[0]
         {
             self.bracket = Some((self.pilot.fx, f));
+            return true;
         }
+        false
     }
 
     /// Takes over the state of checkpoint `c`; returns the stage it resumes in and where.

@@ -50,6 +50,24 @@ fn write_error(path: &Path, source: std::io::Error) -> RunError {
     }
 }
 
+/// The name of the contact table of `step`.
+fn contact_csv_name(step: usize) -> String {
+    format!("contact_{step:04}.csv")
+}
+
+/// Writes the contact table of `step` alone (a run that writes no `.vtu` files), atomically.
+pub fn write_contact_csv(
+    model: &Model,
+    dir: &Path,
+    step: usize,
+    st: &State,
+) -> Result<(), RunError> {
+    write_file(
+        &dir.join(contact_csv_name(step)),
+        contact_csv(model, st).as_bytes(),
+    )
+}
+
 /// One converged step to write, with its own copy of what it needs.
 pub struct StepOutput {
     pub step: usize,
@@ -271,6 +289,8 @@ pub struct Series<'a> {
     reaper: super::Reaper,
     /// Seconds spent writing so far.
     pub seconds: f64,
+    /// Write the contact table with each step (`output.contact_csv`).
+    pub contact_csv: bool,
 }
 
 impl<'a> Series<'a> {
@@ -286,6 +306,7 @@ impl<'a> Series<'a> {
             entries: Vec::new(),
             reaper: super::Reaper::new(),
             seconds: 0.0,
+            contact_csv: true,
         }
     }
 
@@ -371,10 +392,12 @@ impl<'a> Series<'a> {
                 part: 1,
                 file: cname,
             });
-            files.push((
-                dir.join(format!("contact_{step:04}.csv")),
-                contact_csv(model, st).into_bytes(),
-            ));
+            if self.contact_csv {
+                files.push((
+                    dir.join(contact_csv_name(step)),
+                    contact_csv(model, st).into_bytes(),
+                ));
+            }
         }
         files.push((
             dir.join(format!("{stem}.pvd")),

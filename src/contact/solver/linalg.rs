@@ -692,6 +692,14 @@ pub struct BlockRecord {
     pub unk: Vec<usize>,
     /// Positions in the block of the columns solved for, batch by batch.
     pub batches: Vec<Vec<usize>>,
+    /// The last direct solve `x̃ = K⁻¹ b̃` and its right-hand side (empty: none).
+    #[serde(default)]
+    pub bt: Vec<f64>,
+    #[serde(default)]
+    pub xt: Vec<f64>,
+    /// `(μ, W μ)` of the last two converged iterates, the older first.
+    #[serde(default)]
+    pub products: Vec<(Vec<f64>, Vec<f64>)>,
 }
 
 /// Contact systems with fewer candidate unknowns than this are solved through the dense Newton
@@ -820,17 +828,29 @@ impl LuCache {
         self.xt.clear();
     }
 
-    /// At a checkpoint: forgets what a resumed run could not rebuild bit for bit (the dense
-    /// LU, the last direct solve and the products kept for the next steps) and returns what it can (see [`BlockRecord`]).
-    pub fn checkpoint(&mut self) -> Option<BlockRecord> {
+    /// At the end of every converged step: forgets the factorisations of this step's own
+    /// matrices (the dense LU and the capacitance LU), which a resumed run could not rebuild
+    /// bit for bit. What is kept — the factorised block `K`, the columns solved from it, the
+    /// last direct solve and the products of the last two converged iterates — is what
+    /// [`Self::checkpoint`] records, so a run computes the same whichever of its steps are
+    /// checkpoints (written steps) and a run resumed from any of them computes what the
+    /// uninterrupted run computes.
+    pub fn end_step(&mut self) {
         self.lu = None;
         self.cap_lu = None;
         self.unk.clear();
-        self.forget_direct();
-        self.products.clear();
-        self.k_llt.as_ref().map(|_| BlockRecord {
-            unk: self.k_unk.clone(),
-            batches: self.batches.clone(),
+    }
+
+    /// What a resumed run needs to rebuild the state kept by [`Self::end_step`] (see
+    /// [`BlockRecord`]); `None` when no block is factorised.
+    pub fn checkpoint(&self) -> Option<BlockRecord> {
+        let block = self.k_llt.is_some();
+        (block || !self.products.is_empty()).then(|| BlockRecord {
+            unk: if block { self.k_unk.clone() } else { Vec::new() },
+            batches: if block { self.batches.clone() } else { Vec::new() },
+            bt: self.bt.clone(),
+            xt: self.xt.clone(),
+            products: self.products.clone(),
         })
     }
 
@@ -845,16 +865,22 @@ impl LuCache {
         rec: &BlockRecord,
     ) -> bool {
         let (count, taken) = (self.factorisations, self.prefix_blocks);
-        let ok = self.factorise_block(w, prefix, &rec.unk).is_some()
-            && rec.batches.iter().all(|b| {
-                b.iter().all(|&q| q < self.k_unk.len()) && self.solve_columns(b.clone()).is_some()
-            });
+        let ok = rec.unk.is_empty()
+            || self.factorise_block(w, prefix, &rec.unk).is_some()
+                && rec.batches.iter().all(|b| {
+                    b.iter().all(|&q| q < self.k_unk.len())
+                        && self.solve_columns(b.clone()).is_some()
+                });
         self.factorisations = count;
         self.prefix_blocks = taken;
         if !ok {
             self.clear();
+            return false;
         }
-        ok
+        self.bt = rec.bt.clone();
+        self.xt = rec.xt.clone();
+        self.products = rec.products.clone();
+        true
     }
 
     /// Solves the structured Newton system `rows` (see [`super::ContactSystem::newton_rows`]) with the
@@ -1612,9 +1638,14 @@ mod tests {
         off[..m / 8 + 1].iter_mut().for_each(|v| *v += 1e-3);
         cache.predict_with(Some(t));
         assert!(cache.recall_w_mu(&off, &w).is_none());
-        // A checkpoint forgets them (a resumed run does not have them).
-        cache.checkpoint();
-        cache.predict_with(Some(t));
-        assert!(cache.recall_w_mu(&mu1, &w).is_none());
+        // A checkpoint records them and a replay of the record restores them: a resumed run
+        // recalls what the uninterrupted one does.
+        let rec = cache.checkpoint().expect("products kept");
+        let mut resumed = LuCache::default();
+        assert!(resumed.replay(&w, None, &rec));
+        assert_eq!(resumed.recall_w_mu(&mu1, &w), Some(product(&w, &mu1)));
+        // A step's end keeps them too.
+        cache.end_step();
+        assert_eq!(cache.recall_w_mu(&mu1, &w), Some(product(&w, &mu1)));
     }
 }
