@@ -70,10 +70,24 @@ struct Snapshot {
 #[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct EnergySaved {
     row: EnergyRow,
+    /// The rows of the steps so far: in the journal, not in the state file.
+    #[serde(skip)]
     rows: Vec<EnergyRow>,
     per_cycle: Vec<CycleEnergy>,
     worst: f64,
     size: f64,
+}
+
+impl EnergySaved {
+    /// The rows of the steps so far (read back from the journal).
+    pub fn set_rows(&mut self, rows: Vec<EnergyRow>) {
+        self.rows = rows;
+    }
+
+    /// The rows of the steps so far.
+    pub fn rows(&self) -> &[EnergyRow] {
+        &self.rows
+    }
 }
 
 /// Accumulates the energies of the converged steps of a run.
@@ -109,6 +123,11 @@ impl EnergyMeter {
     }
 
     /// What a restart needs to go on.
+    /// The last step's energy row (for the journal).
+    pub fn last_row(&self) -> Option<&EnergyRow> {
+        self.rows.last()
+    }
+
     pub fn saved(&self) -> EnergySaved {
         EnergySaved {
             row: self.row.clone(),

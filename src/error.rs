@@ -104,6 +104,17 @@ pub enum RunError {
     #[error("--resume {path}: {why}")]
     Resume { path: String, why: String },
     #[error(
+        "stage {stage} leaves `{key}` force-controlled, but with frictionless contact nothing \
+         holds `{body}` along that axis (no support, and the contact carries no tangential \
+         force): give `{key}` a displacement (e.g. \"{key}\": {{\"displacement\": 0.0}}) or \
+         friction to the contact"
+    )]
+    FreeDirection {
+        key: &'static str,
+        stage: usize,
+        body: String,
+    },
+    #[error(
         "the contact reached the edge of the candidate zone (candidate gap {gap:e}) at step {step}"
     )]
     ZoneClipped { gap: f64, step: usize },
@@ -212,8 +223,10 @@ impl RunError {
     /// a force-controlled tangential load passes the largest load the contact can carry.
     pub fn exit_code(&self) -> i32 {
         match self {
-            RunError::Case(_) | RunError::Resume { .. } => 2,
+            RunError::Case(_) | RunError::Resume { .. } | RunError::FreeDirection { .. } => 2,
             RunError::Model(e) => model_exit_code(e),
+            // A load path that no equilibrium carries at any load: known before its first step.
+            RunError::Step(f) if matches!(f.cause, StepError::BeyondFriction { .. }) => 2,
             RunError::Step(_)
             | RunError::Check(_)
             | RunError::ZoneKeptGrowing { .. }
@@ -228,7 +241,7 @@ impl RunError {
 /// when Q_max is below f_d P (the least the contact carries once every point has weakened).
 fn lost_message(q_max: f64, q_fail: f64, cutbacks: usize, local_peak: Option<f64>) -> String {
     let bracket = format!(
-        "Q_max = {q_max:.6} (bracketed to [{q_max:.6}, {q_fail:.6}] by {cutbacks} bisections); the \
+        "Q_max = {q_max:.6} (bracketed to [{q_max:.6}, {q_fail:.6}] in {cutbacks} failed attempts); the \
          output holds the state just before it"
     );
     match local_peak {
@@ -242,5 +255,23 @@ fn lost_message(q_max: f64, q_fail: f64, cutbacks: usize, local_peak: Option<f64
              force control cannot follow (typically a mesh that does not resolve s0); slip \
              control traces the path past it"
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_local_peak_below_fd_p_is_not_called_gross_sliding() {
+        let local = lost_message(0.5438, 0.5439, 7, Some(1.0));
+        assert!(local.contains("local peak, not gross sliding"), "{local}");
+        assert!(local.contains("f_d P = 1.000000"), "{local}");
+        assert!(local.contains("in 7 failed attempts"), "{local}");
+        let gross = lost_message(1.2, 1.21, 20, None);
+        assert!(
+            gross.starts_with("equilibrium lost (gross sliding)"),
+            "{gross}"
+        );
     }
 }

@@ -123,6 +123,10 @@ pub struct Summary {
     /// unusable entry replaced) or `off`, with the entry's path and size.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cache: Option<crate::cache::Report>,
+    /// Bytes of this run's files in the output directory (`.vtu`, `.pvd`, contact tables,
+    /// restart states, `history.csv`, `energy.csv`), counted when `summary.json` is written
+    /// (which it does not count).
+    pub output_bytes: u64,
 }
 
 /// The self-checks of the last converged step (none when no step converged).
@@ -261,10 +265,55 @@ pub fn end_summary(case_path: &Path, s: &Summary, out_dir: &Path, stem: &str) ->
         );
     }
     o += &format!(
-        "  output    {} ({stem}.pvd, history.csv, summary.json)\n",
-        out_dir.display()
+        "  output    {} ({stem}.pvd, history.csv, summary.json): {}\n",
+        out_dir.display(),
+        human_bytes(s.output_bytes)
     );
+    if let Some(c) = &s.cache
+        && let (Some(path), Some(bytes)) = (&c.path, c.bytes)
+    {
+        o += &format!(
+            "  cache     {} entry {path}: {} (clear with `rm -r` of its directory)\n",
+            serde_json::to_value(c.status)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_string))
+                .unwrap_or_default(),
+            human_bytes(bytes)
+        );
+    }
     o
+}
+
+/// `bytes` for a person: B, KiB, MiB or GiB.
+pub fn human_bytes(bytes: u64) -> String {
+    let b = bytes as f64;
+    match bytes {
+        0..1024 => format!("{bytes} B"),
+        1024..1_048_576 => format!("{:.1} KiB", b / 1024.0),
+        1_048_576..1_073_741_824 => format!("{:.1} MiB", b / 1_048_576.0),
+        _ => format!("{:.2} GiB", b / 1_073_741_824.0),
+    }
+}
+
+/// Bytes of the files of a run of case `stem` in `dir` (see [`Summary::output_bytes`]).
+pub fn output_bytes(dir: &Path, stem: &str) -> u64 {
+    let ours = |n: &str| {
+        n == crate::restart::JOURNAL
+            || n.starts_with(&format!("{stem}_")) && n.ends_with(".vtu")
+            || n == format!("{stem}.pvd")
+            || n.starts_with("contact_") && n.ends_with(".csv")
+            || n.starts_with("state_") && n.ends_with(".json")
+            || n == "history.csv"
+            || n == "energy.csv"
+    };
+    std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter(|e| ours(&e.file_name().to_string_lossy()))
+        .filter_map(|e| e.metadata().ok())
+        .map(|m| m.len())
+        .sum()
 }
 
 /// The friction summary of a run: the law's Δ and W/p and the paper's scales Λ, χ, Ψ, s0 for
@@ -502,6 +551,7 @@ pub fn summarise(
         status,
         energy: None,
         cache: model.cache_report(),
+        output_bytes: 0,
     };
     (summary, failure, lost_equilibrium)
 }
@@ -551,6 +601,9 @@ pub fn print_warnings(summary: &Summary, show: bool) {
         );
     }
     for c in &summary.checks {
+        if c.level == crate::checks::Level::NotApplied {
+            eprintln!("note: check `{}` {}", c.name, c.note);
+        }
         // The s0 warning is printed above in its own words.
         if c.level == crate::checks::Level::Warning && c.name != "s0_resolution" {
             eprintln!(

@@ -1,7 +1,11 @@
-//! Exact restart: at every written step a run saves the whole state it needs to go on
+//! Exact restart: at every written step a run saves the state it needs to go on
 //! (`state_NNNN.json`: the driver's [`Checkpoint`] with the contact state, slip history and
-//! stage position; the `.pvd` entries so far; the energy balance so far) under an identity of
-//! the case file, its mesh and the program version. `stickslip run CASE --resume PATH` goes on
+//! stage position; how many `.pvd` entries and step records it has; the energy balance's sums)
+//! under an identity of the case file, its mesh and the program version. A state's size does
+//! not grow with the steps: the step records (and their energy rows) go, one JSON line per
+//! converged step, to the journal `steps.jsonl` beside the states, appended as the steps
+//! converge, and the `.pvd` entries are read back from the `.pvd` file; a state names how many
+//! of each are its own. `stickslip run CASE --resume PATH` goes on
 //! from such a state and writes what the uninterrupted run writes (timings apart): at every
 //! checkpoint the contact solver keeps only the factorisations the state records how to rebuild
 //! (the Delassus block and the batches of columns solved from it), and the resumed run rebuilds
@@ -16,9 +20,13 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// Version of the state file layout.
-pub const FORMAT: u32 = 2;
+pub const FORMAT: u32 = 3;
 
-/// What `state_NNNN.json` holds.
+/// The journal of step records a run writes beside its states.
+pub const JOURNAL: &str = "steps.jsonl";
+
+/// What `state_NNNN.json` holds. The step records of its checkpoint, the energy rows and the
+/// `.pvd` entries are not in the file: [`load`] reads them from the journal and the `.pvd`.
 #[derive(Serialize, Deserialize)]
 pub struct SavedRun {
     pub format: u32,
@@ -28,8 +36,85 @@ pub struct SavedRun {
     /// The candidate gap the model was built with (the zone may have been widened).
     pub candidate_gap: Option<f64>,
     pub checkpoint: Checkpoint,
+    /// Records in the journal up to this state (its converged steps).
+    pub steps: usize,
+    /// Entries of the `.pvd` up to this state.
+    pub pvd_entries: usize,
+    #[serde(skip)]
     pub pvd: Vec<PvdEntry>,
     pub energy: Option<EnergySaved>,
+}
+
+/// One line of the journal: a converged step's record and, when the run keeps it, its
+/// energy row.
+#[derive(Serialize, Deserialize)]
+pub struct JournalLine {
+    pub record: crate::report::StepRecord,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub energy: Option<crate::energy::EnergyRow>,
+}
+
+/// The journal's text for `lines`.
+pub fn journal_text(lines: &[JournalLine]) -> String {
+    lines
+        .iter()
+        .map(|l| serde_json::to_string(l).expect("serialisable") + "\n")
+        .collect()
+}
+
+/// The first `n` lines of the journal in `dir`.
+fn read_journal(dir: &Path, n: usize) -> Result<Vec<JournalLine>, String> {
+    let path = dir.join(JOURNAL);
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| format!("cannot read its journal {}: {e}", path.display()))?;
+    let lines: Vec<JournalLine> = text
+        .lines()
+        .take(n)
+        .enumerate()
+        .map(|(i, l)| {
+            serde_json::from_str(l)
+                .map_err(|e| format!("{} line {}: not a step record ({e})", path.display(), i + 1))
+        })
+        .collect::<Result<_, _>>()?;
+    if lines.len() < n {
+        return Err(format!(
+            "its journal {} holds {} steps, fewer than the state's {n}",
+            path.display(),
+            lines.len()
+        ));
+    }
+    Ok(lines)
+}
+
+/// The first `n` entries of the `.pvd` file `path`.
+fn read_pvd(path: &Path, n: usize) -> Result<Vec<PvdEntry>, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let attr = |l: &str, key: &str| -> Option<String> {
+        let rest = l.split(&format!(" {key}=\"")).nth(1)?;
+        Some(rest[..rest.find('"')?].to_string())
+    };
+    let entries: Vec<PvdEntry> = text
+        .lines()
+        .filter(|l| l.trim_start().starts_with("<DataSet"))
+        .take(n)
+        .map(|l| {
+            Some(PvdEntry {
+                time: attr(l, "timestep")?.parse().ok()?,
+                part: attr(l, "part")?.parse().ok()?,
+                file: attr(l, "file")?,
+            })
+        })
+        .collect::<Option<_>>()
+        .ok_or_else(|| format!("{}: a DataSet line that cannot be read", path.display()))?;
+    if entries.len() < n {
+        return Err(format!(
+            "{} holds {} entries, fewer than the state's {n}",
+            path.display(),
+            entries.len()
+        ));
+    }
+    Ok(entries)
 }
 
 /// The identity a state must carry to resume `case` (read from `case_path`): the bytes of the
@@ -99,6 +184,21 @@ pub fn load(path: &Path, case: &Case, case_path: &Path) -> Result<SavedRun, RunE
         ));
     }
     let id = run_id(case, case_path)?;
+    let mut saved = saved;
+    if saved.id == id {
+        let dir = file.parent().unwrap_or(Path::new("."));
+        let lines = read_journal(dir, saved.steps).map_err(|why| bad(&file, why))?;
+        let stem = case_path
+            .file_stem()
+            .map(|s| s.to_string_lossy().to_string())
+            .unwrap_or("case".into());
+        saved.pvd = read_pvd(&dir.join(format!("{stem}.pvd")), saved.pvd_entries)
+            .map_err(|why| bad(&file, why))?;
+        if let Some(e) = saved.energy.as_mut() {
+            e.set_rows(lines.iter().filter_map(|l| l.energy.clone()).collect());
+        }
+        saved.checkpoint.records = lines.into_iter().map(|l| l.record).collect();
+    }
     if saved.id != id {
         return Err(bad(
             &file,

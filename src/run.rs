@@ -4,7 +4,8 @@
 
 use crate::case::Case;
 pub use crate::driver::{
-    LogLevel, MAX_CUTBACKS, Restart, STEP_BUDGET, STEP_BUDGET_MIN, step_budget, Simulation, StepEvent, simulate, simulate_with,
+    LogLevel, MAX_CUTBACKS, Restart, STEP_BUDGET, STEP_BUDGET_MIN, Simulation, StepEvent, simulate,
+    simulate_with, step_budget,
 };
 use crate::energy::EnergyMeter;
 pub use crate::error::RunError;
@@ -127,6 +128,36 @@ pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
     })
 }
 
+/// Projected output above which a run warns before it starts (10 GiB).
+pub const OUTPUT_WARN_BYTES: u64 = 10 << 30;
+
+/// Bytes of a written step's `.vtu` files per node of the model, raw binary (coordinates,
+/// displacement, stresses, von Mises, body and node ids: 120 B per node measured on
+/// `pad_flat.msh`), and of its contact files per contact node.
+const VTU_BYTES_PER_NODE: u64 = 128;
+const CONTACT_BYTES_PER_NODE: u64 = 512;
+
+/// Bytes of one written step (see [`VTU_BYTES_PER_NODE`]).
+fn step_bytes(model: &Model) -> u64 {
+    let nodes = model.active.iter().filter(|a| **a).count() as u64;
+    let contact = model.contact.as_ref().map_or(0, |c| c.system.ns) as u64;
+    nodes * VTU_BYTES_PER_NODE + contact * CONTACT_BYTES_PER_NODE
+}
+
+/// Steps a run of `case` writes when no step is cut back (with `output.substeps`, cutbacks
+/// add more).
+fn written_steps(case: &Case) -> u64 {
+    if !case.output.vtu {
+        return 0;
+    }
+    (case.total_steps() / case.output.every + 1) as u64
+}
+
+/// The output a run of `case` on `model` is projected to write, restart states aside.
+fn projected_output_bytes(case: &Case, model: &Model) -> u64 {
+    written_steps(case) * step_bytes(model)
+}
+
 /// How many of the case's nominal load steps the load path has covered at `time` (stage index
 /// plus the fraction of that stage).
 fn nominal_steps_done(case: &Case, time: f64) -> f64 {
@@ -174,6 +205,17 @@ pub fn run_model(
         .map(|s| s.to_string_lossy().to_string())
         .unwrap_or("case".into());
     let level = opts.level();
+    let projected = projected_output_bytes(case, &model);
+    if level >= LogLevel::Warn && projected > OUTPUT_WARN_BYTES {
+        eprintln!(
+            "warning: this run will write about {} to {} ({} written steps of about {} each; \
+             `output.every` writes fewer, `\"vtu\": false` none)",
+            crate::report::human_bytes(projected),
+            out_dir.display(),
+            written_steps(case),
+            crate::report::human_bytes(step_bytes(&model)),
+        );
+    }
     let progress = Progress::new(case, level);
     let law = model.friction.clone();
     let mut series = Series::new(&model, out_dir, &stem, case.output.compress);
@@ -181,6 +223,34 @@ pub fn run_model(
     let mut energy = case.tracks_energy().then(|| EnergyMeter::new(&model));
     let candidate_gap = model.contact.as_ref().map(|c| c.pair.candidate_gap);
     let mut from = None;
+    // The journal of step records beside the states (see `crate::restart`): begun afresh, or
+    // with the records of the state a resumed run goes on from.
+    let journal_path = out_dir.join(restart::JOURNAL);
+    let mut journal = if case.output.vtu {
+        let start = resume.as_ref().map_or(String::new(), |s| {
+            let rows = s.energy.as_ref().map(|e| e.rows().to_vec());
+            let lines: Vec<restart::JournalLine> = s
+                .checkpoint
+                .records
+                .iter()
+                .enumerate()
+                .map(|(i, r)| restart::JournalLine {
+                    record: r.clone(),
+                    energy: rows.as_ref().and_then(|rows| rows.get(i).cloned()),
+                })
+                .collect();
+            restart::journal_text(&lines)
+        });
+        let journal_error = |source| RunError::Write {
+            path: journal_path.display().to_string(),
+            source,
+        };
+        let mut f = std::fs::File::create(&journal_path).map_err(journal_error)?;
+        std::io::Write::write_all(&mut f, start.as_bytes()).map_err(journal_error)?;
+        Some(f)
+    } else {
+        None
+    };
     if let Some(s) = resume {
         series = series.with_entries(s.pvd);
         if let Some(saved) = s.energy {
@@ -194,145 +264,172 @@ pub fn run_model(
         from,
     };
     // The steps are written on a thread of their own while the next ones are solved.
-    let (summarised, history, solve_s, t_write, t_wait, bracket_attempts) = std::thread::scope(|scope| {
-        let mut writer = Background::spawn(scope, series);
-        // The last converged step not yet written (`output.every` > 1).
-        let mut unwritten: Option<StepOutput> = None;
-        // The last step and where its recovered displacements come from (runs with contact:
-        // the writer recovers them with the steps it writes and sends them back).
-        let mut last_u: Option<(usize, Receiver<Vec<f64>>)> = None;
-        let mut on_step = |ev: &StepEvent| {
-            progress.step(ev);
-            if let Some(m) = energy.as_mut() {
-                m.step(&model, ev);
-            }
-            // Written: the nominal steps `output.every` picks and the last one, and with
-            // `output.substeps` the sub-steps of cutbacks between them too.
-            let picked = ev.last
-                || match ev.nominal {
-                    Some(k) => k.is_multiple_of(case.output.every),
-                    None => case.output.substeps,
+    let (summarised, history, solve_s, t_write, t_wait, bracket_attempts) =
+        std::thread::scope(|scope| {
+            let mut writer = Background::spawn(scope, series);
+            // The last converged step not yet written (`output.every` > 1).
+            let mut unwritten: Option<StepOutput> = None;
+            // The last step and where its recovered displacements come from (runs with contact:
+            // the writer recovers them with the steps it writes and sends them back).
+            let mut last_u: Option<(usize, Receiver<Vec<f64>>)> = None;
+            let mut on_step = |ev: &StepEvent| {
+                progress.step(ev);
+                if let Some(m) = energy.as_mut() {
+                    m.step(&model, ev);
+                }
+                // Written: the nominal steps `output.every` picks and the last one, and with
+                // `output.substeps` the sub-steps of cutbacks between them too.
+                let picked = ev.last
+                    || match ev.nominal {
+                        Some(k) => k.is_multiple_of(case.output.every),
+                        None => case.output.substeps,
+                    };
+                if let Some(f) = journal.as_mut() {
+                    let line = restart::JournalLine {
+                        record: ev.record.clone(),
+                        energy: energy.as_ref().and_then(|m| m.last_row().cloned()),
+                    };
+                    let text = restart::journal_text(std::slice::from_ref(&line));
+                    let journal_error = |source| RunError::Write {
+                        path: journal_path.display().to_string(),
+                        source,
+                    };
+                    std::io::Write::write_all(f, text.as_bytes()).map_err(journal_error)?;
+                    // On the device before the state that counts this line.
+                    if ev.checkpoint.is_some() {
+                        f.sync_data().map_err(journal_error)?;
+                    }
+                }
+                if !case.output.vtu {
+                    if picked
+                        && case.output.contact_csv
+                        && let Some(st) = ev.contact
+                    {
+                        crate::output::series::write_contact_csv(&model, out_dir, ev.step, st)?;
+                    }
+                    return Ok(());
+                }
+                // A write that failed stops the run at its next step.
+                writer.check()?;
+                // The last step's displacements are recovered once, by the writer (with the steps
+                // queued before it), for its output and for the checks of the summary.
+                let reply = match (ev.u, ev.contact) {
+                    (None, Some(_)) if ev.last => {
+                        let (tx, rx) = sync_channel(1);
+                        last_u = Some((ev.step, rx));
+                        Some(tx)
+                    }
+                    _ => None,
                 };
-            if !case.output.vtu {
-                if picked
-                    && case.output.contact_csv
-                    && let Some(st) = ev.contact
-                {
-                    crate::output::series::write_contact_csv(&model, out_dir, ev.step, st)?;
+                let out = StepOutput {
+                    reply,
+                    step: ev.step,
+                    time: ev.time,
+                    scale: ev.scale,
+                    u: ev.u.cloned(),
+                    contact: ev.contact.cloned(),
+                    // The state to resume from, written after the step's files.
+                    state: ev.checkpoint.map(|c| SavedRun {
+                        format: restart::FORMAT,
+                        id: id.clone(),
+                        candidate_gap,
+                        checkpoint: c.clone(),
+                        steps: ev.step,
+                        // The writer fills in the count of `.pvd` entries written with the
+                        // step's files.
+                        pvd_entries: 0,
+                        pvd: Vec::new(),
+                        energy: energy.as_ref().map(EnergyMeter::saved),
+                    }),
+                };
+                if picked {
+                    unwritten = None;
+                    writer.send(out)
+                } else {
+                    // Kept so that a run that stops early still writes its last converged state.
+                    unwritten = Some(out);
+                    Ok(())
                 }
-                return Ok(());
+            };
+            crate::trace::mark("simulate");
+            let sim = simulate_with(&model, case, law.as_ref(), level, &mut on_step, restart);
+            let sim = match sim {
+                Ok(sim) => sim,
+                // The steps handed to the writer are written first; its error came first.
+                Err(e) => return Err(writer.finish().err().unwrap_or(e)),
+            };
+            if let Some(w) = unwritten.take()
+                && sim.failure.is_some()
+            {
+                writer.send(w)?;
             }
-            // A write that failed stops the run at its next step.
-            writer.check()?;
-            // The last step's displacements are recovered once, by the writer (with the steps
-            // queued before it), for its output and for the checks of the summary.
-            let reply = match (ev.u, ev.contact) {
-                (None, Some(_)) if ev.last => {
-                    let (tx, rx) = sync_channel(1);
-                    last_u = Some((ev.step, rx));
-                    Some(tx)
+            // The steps still waiting for the writer: this thread prepares them from the last
+            // while the writer finishes those it has; then the summary and its checks. The
+            // summary's equilibrium check of the last step starts as soon as its field is
+            // recovered, on a thread of its own: it fills the time the two output threads wait
+            // for the device's writes and for each other at the end, instead of following them.
+            let mut sim = sim;
+            match last_u {
+                Some((step, rx)) if sim.last_u.is_none() && sim.records.len() == step => {
+                    let (sim_ref, model_ref) = (&sim, &model);
+                    let (u, equilibrium) = std::thread::scope(|s| {
+                        let checking = std::thread::Builder::new()
+                            .name("stickslip-check".into())
+                            .spawn_scoped(s, move || {
+                                // None when the writer stopped on an error first (reported by
+                                // `finish` below).
+                                let u = rx.recv().ok()?;
+                                let e = crate::checks::equilibrium(&crate::checks::Input {
+                                    model: model_ref,
+                                    u: &u,
+                                    scale: sim_ref.last_scale,
+                                    state: sim_ref.last_state.as_ref(),
+                                    records: &sim_ref.records,
+                                    friction: None,
+                                    equilibrium: None,
+                                });
+                                Some((u, e))
+                            })
+                            .expect("the check thread starts");
+                        let _ = writer.help();
+                        checking
+                            .join()
+                            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+                            .unzip()
+                    });
+                    sim.last_u = u;
+                    sim.equilibrium = equilibrium;
                 }
-                _ => None,
-            };
-            let out = StepOutput {
-                reply,
-                step: ev.step,
-                time: ev.time,
-                scale: ev.scale,
-                u: ev.u.cloned(),
-                contact: ev.contact.cloned(),
-                // The state to resume from, written after the step's files.
-                state: ev.checkpoint.map(|c| SavedRun {
-                    format: restart::FORMAT,
-                    id: id.clone(),
-                    candidate_gap,
-                    checkpoint: c.clone(),
-                    // The writer fills in the `.pvd` entries written with the step's files.
-                    pvd: Vec::new(),
-                    energy: energy.as_ref().map(EnergyMeter::saved),
-                }),
-            };
-            if picked {
-                unwritten = None;
-                writer.send(out)
-            } else {
-                // Kept so that a run that stops early still writes its last converged state.
-                unwritten = Some(out);
-                Ok(())
-            }
-        };
-        crate::trace::mark("simulate");
-        let sim = simulate_with(&model, case, law.as_ref(), level, &mut on_step, restart);
-        let sim = match sim {
-            Ok(sim) => sim,
-            // The steps handed to the writer are written first; its error came first.
-            Err(e) => return Err(writer.finish().err().unwrap_or(e)),
-        };
-        if let Some(w) = unwritten.take()
-            && sim.failure.is_some()
-        {
-            writer.send(w)?;
-        }
-        // The steps still waiting for the writer: this thread prepares them from the last
-        // while the writer finishes those it has; then the summary and its checks. The
-        // summary's equilibrium check of the last step starts as soon as its field is
-        // recovered, on a thread of its own: it fills the time the two output threads wait
-        // for the device's writes and for each other at the end, instead of following them.
-        let mut sim = sim;
-        match last_u {
-            Some((step, rx)) if sim.last_u.is_none() && sim.records.len() == step => {
-                let (sim_ref, model_ref) = (&sim, &model);
-                let (u, equilibrium) = std::thread::scope(|s| {
-                    let checking = std::thread::Builder::new()
-                        .name("stickslip-check".into())
-                        .spawn_scoped(s, move || {
-                            // None when the writer stopped on an error first (reported by
-                            // `finish` below).
-                            let u = rx.recv().ok()?;
-                            let e = crate::checks::equilibrium(&crate::checks::Input {
-                                model: model_ref,
-                                u: &u,
-                                scale: sim_ref.last_scale,
-                                state: sim_ref.last_state.as_ref(),
-                                records: &sim_ref.records,
-                                friction: None,
-                                equilibrium: None,
-                            });
-                            Some((u, e))
-                        })
-                        .expect("the check thread starts");
+                _ => {
                     let _ = writer.help();
-                    checking
-                        .join()
-                        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
-                        .unzip()
-                });
-                sim.last_u = u;
-                sim.equilibrium = equilibrium;
+                }
             }
-            _ => {
-                let _ = writer.help();
+            // Every field is recovered, or its recovery has started (the writer took the steps
+            // left): the factor's values are freed once those end, on a thread of their own, while
+            // the output and the summary are finished (hundreds of MB, which would otherwise be
+            // freed after them: 10 ms on L5, 45 ms on L7).
+            if sim.last_u.is_some()
+                && let Some(values) = model.condensed.chol.release()
+            {
+                scope.spawn(move || free_when_unshared(values));
             }
-        }
-        // Every field is recovered, or its recovery has started (the writer took the steps
-        // left): the factor's values are freed once those end, on a thread of their own, while
-        // the output and the summary are finished (hundreds of MB, which would otherwise be
-        // freed after them: 10 ms on L5, 45 ms on L7).
-        if sim.last_u.is_some()
-            && let Some(values) = model.condensed.chol.release()
-        {
-            scope.spawn(move || free_when_unshared(values));
-        }
-        crate::trace::mark("simulated");
-        let solve_s = sim.solve_s;
-        let bracket_attempts = sim.bracket_attempts;
-        let history = history_csv(&sim.records);
-        let summarised = summarise(&model, case, case_path, out_dir, sim);
-        crate::trace::mark("summarised");
-        let (t_write, t_wait) = writer.finish()?;
-        crate::trace::mark("writer done");
-        Ok((summarised, history, solve_s, t_write, t_wait, bracket_attempts))
-    })?;
+            crate::trace::mark("simulated");
+            let solve_s = sim.solve_s;
+            let bracket_attempts = sim.bracket_attempts;
+            let history = history_csv(&sim.records);
+            let summarised = summarise(&model, case, case_path, out_dir, sim);
+            crate::trace::mark("summarised");
+            let (t_write, t_wait) = writer.finish()?;
+            crate::trace::mark("writer done");
+            Ok((
+                summarised,
+                history,
+                solve_s,
+                t_write,
+                t_wait,
+                bracket_attempts,
+            ))
+        })?;
     progress.finish();
     write_file(&out_dir.join("history.csv"), history.as_bytes())?;
     let (mut summary, failure, lost_equilibrium) = summarised;
@@ -344,6 +441,7 @@ pub fn run_model(
         write_file(&out_dir.join("energy.csv"), m.csv().as_bytes())?;
         summary.energy = m.summary();
     }
+    summary.output_bytes = crate::report::output_bytes(out_dir, &stem);
     write_file(
         &out_dir.join("summary.json"),
         serde_json::to_string_pretty(&summary)

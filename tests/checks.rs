@@ -147,10 +147,11 @@ fn pressed_then_pulled_apart_loses_equilibrium_at_coulomb_limit() {
     let exact = 0.936 * 2.0 / 4.936;
     let rel = q / exact - 1.0;
     println!("Q_max = {q:.6} against {exact:.6} ({rel:.2e})");
-    // Bisection to 2^-12 of a step of 0.1 of the stage would allow 2.3e-5 in Q; the limit is
-    // found far more closely (measured 2.0e-11 relative).
-    let q_tol = 1e-10;
-    assert!(rel.abs() < q_tol, "{q} vs {exact}");
+    // The bracket ends within 2^(1 − MAX_CUTBACKS) = 3.1e-5 of a nominal step (a tenth of
+    // the stage): 7.5e-6 relative in Q at most. The converged load is below the limit, never
+    // above it.
+    let q_tol = 7.5e-6;
+    assert!(rel.abs() < q_tol && q <= exact, "{q} vs {exact}");
     let eq = check(&s, "equilibrium")["value"].as_f64().unwrap();
     println!("equilibrium {eq:.2e}");
     // Measured 9.6e-14.
@@ -255,26 +256,31 @@ fn a_hold_stage_keeps_the_state() {
     );
 }
 
-/// Fig. 2 on L0 (s0 not resolved): force control stops at a local peak of the load path,
-/// Q = 0.5438 N/mm, far below f_d P = 1 N/mm (slip control passes it and peaks at 1.11 f_d P,
-/// see docs/convergence.md). The message must not call that gross sliding.
+/// Fig. 2 on L0 (s0 not resolved, 7 elements across the contact): near Q = 0.5438 N/mm the
+/// stick zone loses two nodes at one load (c 0.563 → 0.461 mm), a snap of the coarse mesh
+/// that the first attempts at a larger load do not converge through. The cutbacks retry the
+/// failed load from ever closer converged states and pass it: the run reaches the shipped
+/// Q = 0.8 N/mm (no peak below f_d P = 1 N/mm, where slip control also passes; see
+/// docs/convergence.md), with the cutbacks recorded at that load.
 #[test]
-fn a_local_peak_below_fd_p_is_not_called_gross_sliding() {
+fn a_snap_of_a_coarse_mesh_is_passed_not_called_a_peak() {
     let dir = tempdir("checks-local-peak");
     let mut case = shipped_case_on("fig2.json", "vm272_L0.msh");
     case["output"] = json!({"vtu": false});
     let r = run_case_in(&dir, "case.json", &case.to_string(), &["--log", "error"]);
-    assert_eq!(r.code, 5, "{}", r.stderr);
-    assert!(
-        r.stderr.contains("local peak, not gross sliding") && r.stderr.contains("f_d P = 1.000000"),
-        "{}",
-        r.stderr
-    );
-    let s = summary(&r.out);
-    let status = s["status"].as_str().unwrap();
-    assert!(status.contains("local peak"), "{status}");
-    let q = s["friction"]["q_max"].as_f64().unwrap();
-    assert!((q - 0.543814).abs() < 1e-5, "Q_max {q}");
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let t = Table::read(&r.out.join("history.csv"));
+    assert!((t.last("pilot_fx") - 0.8).abs() < 1e-12);
+    let snap: Vec<&Vec<f64>> = t
+        .rows
+        .iter()
+        .filter(|row| row[t.col("cutbacks")] > 0.0)
+        .collect();
+    assert!(!snap.is_empty(), "no cutbacks");
+    for row in snap {
+        let q = row[t.col("pilot_fx")];
+        assert!((q - 0.5438).abs() < 1e-3, "cutbacks at Q = {q}");
+    }
 }
 
 /// The summary's checks do not depend on where the last step's field came from: with `.vtu`

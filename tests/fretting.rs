@@ -12,11 +12,11 @@ use stickslip::analytic::{Branch, CattaneoMindlin, Geometry, Hertz, Reversal};
 const MU: f64 = 0.2;
 const Q_STAR: f64 = 1.5;
 
-/// The fretting case with two cycles and every step written.
+/// The fretting case with two cycles and every step written, the sub-steps of cutbacks too.
 fn fretting(name: &str, edit: &dyn Fn(&mut Value)) -> CaseRun {
     let mut v = shipped_case("fretting.json");
     v["stages"][2]["cycles"]["count"] = json!(2);
-    v["output"] = json!({"every": 1});
+    v["output"] = json!({"every": 1, "substeps": true});
     edit(&mut v);
     let r = run_case(name, &v, &["--quiet"]);
     r.assert_ok(name);

@@ -6,7 +6,7 @@
 mod unheld;
 
 use crate::case::{Case, Control, Stage};
-use crate::contact::solver::{self, ContactError, State, Status};
+use crate::contact::solver::{self, State, Status};
 use crate::error::{RunError, StepError, StepFailure};
 use crate::friction::FrictionLaw;
 use crate::model::Model;
@@ -18,8 +18,8 @@ use unheld::{unheld_after, unheld_before};
 
 /// Halvings of a stage's nominal increment before a step is given up: no increment is smaller
 /// than the nominal one over `2^MAX_CUTBACKS`, so a lost equilibrium is bracketed to within
-/// `2^(1 − MAX_CUTBACKS)` of a nominal step (2e-6 of it; see [`Driver::run_stage`]).
-pub const MAX_CUTBACKS: usize = 20;
+/// `2^(1 − MAX_CUTBACKS)` of a nominal step (3e-5 of it; see [`Driver::run_stage`]).
+pub const MAX_CUTBACKS: usize = 16;
 
 /// A stage accepts at most `STEP_BUDGET` times its nominal steps, and at least
 /// `STEP_BUDGET_MIN` steps (room for the bracketing of a peak in a stage of one step), after
@@ -36,7 +36,11 @@ pub fn step_budget(steps: usize) -> usize {
 /// exactly counts as passed).
 fn next_nominal(alpha: f64, steps: usize) -> usize {
     let k = (alpha * steps as f64).floor() as usize;
-    if (k as f64 / steps as f64) <= alpha { k + 1 } else { k }
+    if (k as f64 / steps as f64) <= alpha {
+        k + 1
+    } else {
+        k
+    }
 }
 
 /// How much a run prints to standard error.
@@ -134,6 +138,9 @@ pub struct Checkpoint {
     control: [Control; 2],
     pilot: PilotState,
     pub scale: f64,
+    /// The records of the steps so far: in the journal, not in the state file (see
+    /// [`crate::restart`]).
+    #[serde(skip)]
     pub records: Vec<StepRecord>,
     newton_total: usize,
     factorisations: usize,
@@ -190,6 +197,9 @@ pub fn simulate_with(
         last_u: None,
         checkpoint_every: restart.every,
     };
+    if restart.from.is_none() {
+        free_direction(model, case, d.law.as_ref())?;
+    }
     let mut resume = restart.from.map(|c| d.restore(c));
     let first = resume.as_ref().map_or(0, |r| r.0);
     for (si, stage) in case.stages.iter().enumerate().skip(first) {
@@ -213,6 +223,34 @@ pub fn simulate_with(
         records: d.records,
         equilibrium: None,
     })
+}
+
+/// Refuses, before the first step, a pilot axis that nothing holds: the pilot drives a body
+/// that no support holds, the contact is frictionless, and a stage leaves the pilot's
+/// tangential axis (across the direction that separates the bodies) force-controlled. A
+/// frictionless contact carries no force along it, so the Newton system of every step is
+/// singular in that direction. (A pilot axis keeps its control from stage to stage; before the
+/// first stage that sets it, it is force-controlled at zero.)
+fn free_direction(model: &Model, case: &Case, law: Option<&FrictionLaw>) -> Result<(), RunError> {
+    let (Some((body, sep)), None, Some(_)) = (model.pilot_separation, law, &model.contact) else {
+        return Ok(());
+    };
+    // The tangential axis: the one the separating direction has the least of.
+    let k = if sep[0].abs() > sep[1].abs() { 1 } else { 0 };
+    let mut force = true;
+    for (si, st) in case.stages.iter().enumerate() {
+        if let Some(c) = [st.pilot_x, st.pilot_y][k] {
+            force = matches!(c, Control::Force(_));
+        }
+        if force {
+            return Err(RunError::FreeDirection {
+                key: ["pilot_x", "pilot_y"][k],
+                stage: si,
+                body: case.bodies[body].group.clone(),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// The committed loads at the start of a stage, from which its steps interpolate.
@@ -297,14 +335,14 @@ type StagePosition = (StageStart, f64, f64, Option<(f64, State)>);
 impl Driver<'_> {
     /// Runs the steps of stage `si`; `false` when the run stops (a failure is recorded).
     ///
-    /// The stage's load fraction `α` runs from 0 to 1. A step aims at the next nominal fraction
-    /// `k / steps` (or less, after a cutback), so the nominal loads are reached exactly whatever
-    /// the cutbacks on the way. A failed attempt at `α_f` halves the increment and makes `α_f`
-    /// the bracket's upper end: later attempts go no further than `α_f` until one reaches it.
-    /// Invariants that bound the loop:
-    /// * an increment is never below `Δα_min = (1/steps) / 2^MAX_CUTBACKS`: a failure that
-    ///   would need a smaller one ends the stage (a lost equilibrium under force control,
-    ///   bracketed to within `2 Δα_min` of the stage, else a failed step);
+    /// The stage's load fraction `α` runs from 0 to 1. A step aims at `α + Δα`, and at the
+    /// next nominal fraction `k / steps` when that is nearer, so the nominal loads are reached
+    /// exactly whatever the cutbacks on the way. A failed attempt halves `Δα`; a converged
+    /// step doubles it, up to the nominal `1/steps`. Invariants that bound the loop:
+    /// * `Δα` is never below `Δα_min = (1/steps) / 2^MAX_CUTBACKS`: a failure that would need
+    ///   a smaller increment ends the stage (a lost equilibrium under force control, bracketed
+    ///   between the last converged load and one at most `2 Δα_min` of the stage above it;
+    ///   else a failed step);
     /// * every accepted step advances `α` by at least `Δα_min / 2`;
     /// * a stage accepts at most [`step_budget`] steps.
     fn run_stage(
@@ -336,10 +374,12 @@ impl Driver<'_> {
         }
         // The next nominal fraction to reach: `k_next / steps`.
         let mut k_next = next_nominal(alpha, stage.steps);
-        // The lowest fraction that failed since the last one reached (the bracket's upper
-        // end) and the failed attempts since it was set.
-        let mut upper: Option<f64> = None;
+        // Failed attempts since the last nominal fraction reached.
         let mut attempts = 0usize;
+        // The load of a probe past a stalled one, to attempt next, and whether one was tried
+        // since the last converged step.
+        let mut probe: Option<f64> = None;
+        let mut probed = false;
         let mut cutbacks = 0;
         let budget = step_budget(stage.steps);
         let first_step = self.records.len();
@@ -352,8 +392,8 @@ impl Driver<'_> {
             if goal - a_new < 0.5 * d_min {
                 a_new = goal;
             }
-            if let Some(u) = upper {
-                a_new = a_new.min(u);
+            if let Some(p) = probe.take() {
+                a_new = p;
             }
             let step = self.records.len() + 1;
             if taken_before + (step - 1 - first_step) >= budget {
@@ -402,17 +442,13 @@ impl Driver<'_> {
                     // Failed attempts count in the solve time too (they can dominate a run
                     // that brackets Q_max).
                     self.t_solve += t.elapsed().as_secs_f64();
+                    // A singular contact system is cut back too: an active-set guess in which
+                    // every node slips is singular along the pilot's force-controlled axis, and
+                    // a smaller step starts from another guess. (A direction that nothing
+                    // holds at all was refused before the first step: `free_direction`.)
                     let bracketing = self.note_failed_load(ctl, target[0]);
-                    // A singular system that is not the loss of a force-controlled tangential
-                    // equilibrium (a free direction): no smaller step cures it.
-                    if !bracketing
-                        && matches!(e, StepError::Contact(ContactError::Singular { .. }))
-                    {
-                        return Ok(self.stop(step, e, None));
-                    }
                     attempts += 1;
                     cutbacks += 1;
-                    upper = Some(a_new);
                     dalpha = 0.5 * (a_new - alpha);
                     if dalpha >= d_min {
                         if !self.quiet {
@@ -422,7 +458,27 @@ impl Driver<'_> {
                         }
                         continue;
                     }
-                    if self.bracket.is_some() {
+                    // The increment reached its floor. Before the load is called the end of
+                    // the path, one probe past it: the nominal load at least half a nominal
+                    // step further. Newton can stall on a load where the active set chatters
+                    // while an equilibrium exists past it (a probe that converges goes on
+                    // from there, skipping at most one nominal load); past a lost
+                    // equilibrium the probe fails too.
+                    if !probed {
+                        probed = true;
+                        let k = ((alpha + 0.5 * nominal) * stage.steps as f64).ceil() as usize;
+                        let p = (k.min(stage.steps) as f64) / stage.steps as f64;
+                        if p > a_new {
+                            probe = Some(p);
+                            if !self.quiet {
+                                eprintln!(
+                                    "step {step} of stage {si}: {e}; the increment is at its floor ({d_min:.3e} of the stage): probing the load at {p:.6} of the stage"
+                                );
+                            }
+                            continue;
+                        }
+                    }
+                    if bracketing {
                         self.lost_equilibrium = self.bracket;
                         self.bracket_attempts = attempts;
                     }
@@ -433,13 +489,13 @@ impl Driver<'_> {
                 return Ok(self.stop(step, StepError::NotFinite, None));
             }
             alpha = a_new;
-            if alpha == goal {
-                k_next += 1;
-            }
-            if upper.is_some_and(|u| alpha >= u) {
-                upper = None;
+            probed = false;
+            // A nominal load reached: the aimed one, or one a probe reached.
+            let landed = (alpha * stage.steps as f64).round() as usize;
+            let landed = (landed as f64 / stage.steps as f64 == alpha).then_some(landed);
+            if let Some(k) = landed {
+                k_next = k + 1;
                 attempts = 0;
-                self.bracket = None;
             }
             self.control = ctl;
             self.scale = sc;
@@ -464,7 +520,7 @@ impl Driver<'_> {
             self.lu_cache.end_step();
             // The case's nominal step this step completes, if it lands on one: only those are
             // checkpoints (and written, unless the case asks for every sub-step).
-            let nominal_index = (alpha == goal).then(|| k_next - 1 + self.nominal_before(si));
+            let nominal_index = landed.map(|k| k + self.nominal_before(si));
             let checkpoint = match (self.checkpoint_every, nominal_index) {
                 (Some(n), Some(k)) if k.is_multiple_of(n) || last => Some(Checkpoint {
                     contact_block: self.lu_cache.checkpoint(),
@@ -526,11 +582,7 @@ impl Driver<'_> {
         let loaded_otherwise = start.scale != 0.0 || stage.traction_scale.is_some_and(|v| v != 0.0);
         let mu = law.mu_max();
         (unloaded && !loaded_otherwise && self.model.dofs.pilot.is_some() && q.abs() > mu * f.abs())
-            .then_some(StepError::BeyondFriction {
-                q,
-                p: f,
-                mu,
-            })
+            .then_some(StepError::BeyondFriction { q, p: f, mu })
     }
     /// One contact solve from the committed state `prev` to the fraction `a.1` of the stage
     /// (from `a.0`), with a predictor from the state `older` before it.

@@ -405,7 +405,7 @@ impl<'a> Series<'a> {
         ));
         // The state to resume from, after the step's files.
         if let Some(mut saved) = s.state {
-            saved.pvd = self.entries.clone();
+            saved.pvd_entries = self.entries.len();
             files.push((
                 dir.join(restart::state_name(step)),
                 serde_json::to_string(&saved)

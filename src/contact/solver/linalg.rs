@@ -846,8 +846,16 @@ impl LuCache {
     pub fn checkpoint(&self) -> Option<BlockRecord> {
         let block = self.k_llt.is_some();
         (block || !self.products.is_empty()).then(|| BlockRecord {
-            unk: if block { self.k_unk.clone() } else { Vec::new() },
-            batches: if block { self.batches.clone() } else { Vec::new() },
+            unk: if block {
+                self.k_unk.clone()
+            } else {
+                Vec::new()
+            },
+            batches: if block {
+                self.batches.clone()
+            } else {
+                Vec::new()
+            },
             bt: self.bt.clone(),
             xt: self.xt.clone(),
             products: self.products.clone(),

@@ -1,0 +1,335 @@
+//! Every case file in `cases/` run exactly as shipped — `stickslip run cases/NAME.json` from the
+//! repository, with the case's own mesh and output settings — within a bounded time, with the
+//! physical number it exists for compared against an independent reference:
+//!
+//! | case | reference |
+//! |---|---|
+//! | `hertz` | Hertz's semi-width of VM272, a = 0.6808 mm (`shared/reference/vm272.md`) |
+//! | `vm272_cm` | Cattaneo–Mindlin stick semi-width c = a sqrt(1 − Q/μP) with Hertz's a |
+//! | `fretting` | the same at the first load reversal, Q = 1.5 N/mm |
+//! | `fig2`, `fig3_ramp`, `fig3_step` | the double Cattaneo–Mindlin c/a and b/a at the last load (eqs. Qx, W1) |
+//! | `fig2_softening` | the peak of the slip-controlled curve against the double C–M Q_max/P |
+//! | `pair_*` (Table 1) | equilibrium lost just below f_s (Λ ≫ 1: the double C–M Q_max/P is f_s) |
+//! | `pair_jkr_copper_mild_steel` | Q_max/(f_d P) against the JKR limit (eq. QJKR) |
+//! | `arc_hertz` | no closed form for the scene (a half-disc under Hertz's pressure): the recovered field's balance with that load |
+//! | `own_mesh` | Hertz's semi-width for R1 = 5 mm, R2 = 12 mm (built by `meshes/two_cylinders.py`) |
+//!
+//! A file in `cases/` without a row here fails the test.
+//!
+//! Then the answers do not depend on the output settings: `history.csv` and `summary.json`
+//! (timings and paths aside) are the same bytes with `"vtu": false`, with every step written and
+//! as shipped, on every shipped case.
+
+mod common;
+use common::*;
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+use stickslip::analytic::dcm::DoubleCm;
+
+/// Seconds a shipped case may take on a loaded 2-core machine before the test calls it a hang
+/// (the slowest, Fig. 2 and Fig. 3 on L5, take a few seconds).
+const DEADLINE_S: u64 = 240;
+
+struct Done {
+    code: i32,
+    stderr: String,
+    out: PathBuf,
+    seconds: f64,
+}
+
+/// Runs `stickslip run CASE --out OUT --quiet` from the repository (`case` as given, e.g.
+/// `cases/fig2.json`), killing it at the deadline.
+fn run_bounded(case: &str, out: &Path) -> Done {
+    let t = Instant::now();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .current_dir(repo())
+        .args(["run", case, "--out", out.to_str().unwrap(), "--quiet"])
+        .env("STICKSLIP_NO_CACHE", "1")
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("stickslip starts");
+    let deadline = Instant::now() + Duration::from_secs(DEADLINE_S);
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{case}: still running after {DEADLINE_S} s: a run that never ends");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let mut stderr = String::new();
+    use std::io::Read;
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
+    Done {
+        code: status.code().unwrap_or(-1),
+        stderr,
+        out: out.to_path_buf(),
+        seconds: t.elapsed().as_secs_f64(),
+    }
+}
+
+fn summary(out: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+fn num(v: &Value, key: &str) -> f64 {
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("`{key}` missing in {v}"))
+}
+
+/// Hertz semi-width of two cylinders `r1`, `r2` of one material under `p`.
+fn hertz_a(p: f64, r1: f64, r2: f64, e: f64, nu: f64) -> f64 {
+    let r = r1 * r2 / (r1 + r2);
+    let e_star = e / (2.0 * (1.0 - nu * nu));
+    (4.0 * p * r / (std::f64::consts::PI * e_star)).sqrt()
+}
+
+/// `(|measured / reference − 1|, measured, reference)`, printed.
+fn rel(name: &str, what: &str, got: f64, want: f64) -> f64 {
+    let r = (got / want - 1.0).abs();
+    println!(
+        "{name}: {what} {got:.6} against {want:.6} ({:+.3} %)",
+        100.0 * (got / want - 1.0)
+    );
+    r
+}
+
+/// The row of `history.csv` at the last step of stage `stage`.
+fn stage_end(t: &Table, stage: usize) -> &Vec<f64> {
+    let s = t.col("stage");
+    t.rows
+        .iter()
+        .rfind(|r| r[s] as usize == stage)
+        .expect("the stage has steps")
+}
+
+/// Checks the physical number of shipped case `name` on its finished run `d`.
+fn check_case(name: &str, d: &Done) {
+    let h = || Table::read(&d.out.join("history.csv"));
+    let s = || summary(&d.out);
+    let dcm_fig = |q_over_fdp: f64, tol: f64| {
+        assert_eq!(d.code, 0, "{name}: {}", d.stderr);
+        let f = s()["friction"].clone();
+        let (fs, fd) = (num(&f, "f_s"), num(&f, "f_d"));
+        let lambda = num(&f, "lambda");
+        let (m, weak) = DoubleCm::normalized(fs / fd, lambda).unwrap();
+        let st = m.solve(q_over_fdp, weak).unwrap();
+        let t = h();
+        let last = t.rows.last().unwrap();
+        let (a, c, b) = (last[t.col("a")], last[t.col("c")], last[t.col("b")]);
+        assert!(rel(name, "c/a", c / a, st.c) < tol, "{name}: c/a");
+        assert!(rel(name, "b/a", b / a, st.b) < tol, "{name}: b/a");
+    };
+    match name {
+        "hertz" => {
+            assert_eq!(d.code, 0, "{name}: {}", d.stderr);
+            let a = h().last("a");
+            // Measured −0.13 % on L4 (the contact edge falls between nodes).
+            assert!(rel(name, "a", a, 0.6808) < 0.005);
+        }
+        "vm272_cm" => {
+            assert_eq!(d.code, 0, "{name}: {}", d.stderr);
+            let want = 0.6808 * (1.0f64 - 0.936 / (0.2 * 10.0)).sqrt();
+            // Measured +0.3 % on L4.
+            assert!(rel(name, "c", h().last("c"), want) < 0.01);
+        }
+        "fretting" => {
+            assert_eq!(d.code, 0, "{name}: {}", d.stderr);
+            let t = h();
+            let c = stage_end(&t, 1)[t.col("c")];
+            let want = 0.6808 * (1.0f64 - 1.5 / (0.2 * 10.0)).sqrt();
+            assert!(rel(name, "c at Q = 1.5", c, want) < 0.02);
+        }
+        "fig2" => dcm_fig(0.8, 0.01),
+        "fig3_ramp" | "fig3_step" => dcm_fig(0.9, 0.02),
+        "fig2_softening" => {
+            assert_eq!(d.code, 0, "{name}: {}", d.stderr);
+            let f = s()["friction"].clone();
+            let (fe, dcm) = (
+                num(&f, "apparent_friction"),
+                num(&f, "apparent_friction_dcm"),
+            );
+            assert!(rel(name, "Q_max/P", fe, dcm) < 0.01);
+        }
+        "pair_jkr_copper_mild_steel" => {
+            assert_eq!(d.code, 5, "{name}: {}", d.stderr);
+            let f = s()["friction"].clone();
+            let fe = num(&f, "q_max") / (num(&f, "f_d") * num(&f, "load"));
+            let jkr = num(&f, "apparent_friction_jkr") / num(&f, "f_d");
+            // Measured −0.11 %.
+            assert!(rel(name, "Q_max/(f_d P)", fe, jkr) < 0.003);
+        }
+        n if n.starts_with("pair_") => {
+            assert_eq!(d.code, 5, "{name}: {}", d.stderr);
+            let f = s()["friction"].clone();
+            let (fs, apparent) = (num(&f, "f_s"), num(&f, "apparent_friction"));
+            assert_eq!(num(&f, "apparent_friction_dcm"), fs, "{name}");
+            assert!(apparent < fs, "{name}: Q_max/P = {apparent} ≥ f_s");
+            assert!(rel(name, "Q_max/P", apparent, fs) < 0.005);
+        }
+        "arc_hertz" => {
+            // No closed form gives the field of a half-disc under Hertz's pressure: the number
+            // is the balance of the recovered field against that load (measured 1.9e-14).
+            assert_eq!(d.code, 0, "{name}: {}", d.stderr);
+            let v = s();
+            let eq = v["checks"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|c| c["name"] == "equilibrium")
+                .unwrap()
+                .clone();
+            let r = num(&eq, "value");
+            println!("{name}: equilibrium residual {r:.2e}");
+            assert!(r < 1e-12, "{eq}");
+        }
+        "own_mesh" => {
+            assert_eq!(d.code, 0, "{name}: {}", d.stderr);
+            let case: Value = serde_json::from_str(
+                &std::fs::read_to_string(repo().join("cases/own_mesh.json")).unwrap(),
+            )
+            .unwrap();
+            let body = &case["bodies"][0];
+            let t = h();
+            let row = stage_end(&t, 0);
+            let p = -row[t.col("pilot_fy")];
+            let want = hertz_a(p, 5.0, 12.0, num(body, "E"), num(body, "nu"));
+            assert!(rel(name, "a", row[t.col("a")], want) < 0.02);
+        }
+        other => panic!(
+            "cases/{other}.json has no row in tests/shipped_cases.rs: every shipped case is run \
+             and its physical number checked"
+        ),
+    }
+}
+
+fn shipped_names() -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(repo().join("cases"))
+        .unwrap()
+        .filter_map(|e| {
+            let p = e.unwrap().path();
+            (p.extension()? == "json").then(|| p.file_stem().unwrap().to_string_lossy().into())
+        })
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn every_shipped_case_runs_as_shipped_and_gives_its_number() {
+    let dir = tempdir("shipped");
+    for name in shipped_names() {
+        let d = run_bounded(&format!("cases/{name}.json"), &dir.join(&name));
+        println!("{name}: exit {} in {:.1} s", d.code, d.seconds);
+        check_case(&name, &d);
+        // The shipped scenes are Hertzian: their closed forms apply (tests/profile_reference.rs
+        // shows one that is not).
+        let f = &summary(&d.out)["friction"];
+        if !f.is_null() {
+            println!("{name}: profile rms {}", f["profile_rms"]);
+            assert_eq!(f["hertzian"], json!(true), "{name}: {f}");
+        }
+        let _ = std::fs::remove_dir_all(&d.out);
+    }
+}
+
+/// `history.csv` without its wall-time column.
+fn history_answers(out: &Path) -> String {
+    let t = Table::read(&out.join("history.csv"));
+    let wall = t.col("wall_s");
+    t.rows
+        .iter()
+        .map(|r| {
+            r.iter()
+                .enumerate()
+                .filter(|(i, _)| *i != wall)
+                .map(|(_, v)| format!("{:e}", v))
+                .collect::<Vec<_>>()
+                .join(",")
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// `summary.json` without what measures the machine or names the output.
+fn summary_answers(out: &Path) -> Value {
+    let mut v = summary(out);
+    let o = v.as_object_mut().unwrap();
+    for k in [
+        "timings_s",
+        "contact_solve_s",
+        "contact_phases_s",
+        "peak_memory_mib",
+        "output_dir",
+        "case",
+        "mesh",
+        "cache",
+        "output_bytes",
+    ] {
+        o.remove(k);
+    }
+    for st in o["steps"].as_array_mut().unwrap() {
+        st.as_object_mut().unwrap().remove("wall_s");
+    }
+    v
+}
+
+#[test]
+fn answers_do_not_depend_on_the_output_settings() {
+    let dir = tempdir("shipped-outputs");
+    for name in shipped_names() {
+        // The variants name the shipped mesh by its absolute path (`summary.json`'s `mesh`,
+        // which spells the path, is left out of the comparison).
+        let shipped = shipped_case(&format!("{name}.json"));
+        let mut runs = Vec::new();
+        for (tag, output) in [
+            ("shipped", None),
+            ("novtu", Some(json!({"vtu": false}))),
+            ("every1", Some(json!({"every": 1}))),
+        ] {
+            let out = dir.join(format!("{name}-{tag}"));
+            let d = match output {
+                None => run_bounded(&format!("cases/{name}.json"), &out),
+                Some(o) => {
+                    let mut v = shipped.clone();
+                    v["output"] = o;
+                    let file = dir.join(format!("{name}.{tag}.json"));
+                    std::fs::write(&file, v.to_string()).unwrap();
+                    run_bounded(file.to_str().unwrap(), &out)
+                }
+            };
+            assert!(
+                [0, 5].contains(&d.code),
+                "{name} ({tag}): exit {}: {}",
+                d.code,
+                d.stderr
+            );
+            runs.push((tag, history_answers(&out), summary_answers(&out)));
+            let _ = std::fs::remove_dir_all(&out);
+        }
+        let (_, h0, s0) = &runs[0];
+        for (tag, h, s) in &runs[1..] {
+            assert!(
+                h == h0,
+                "{name}: history.csv differs between shipped and {tag}"
+            );
+            assert!(
+                s == s0,
+                "{name}: summary.json differs between shipped and {tag}"
+            );
+        }
+        println!("{name}: the same answers with vtu off, every step written and as shipped");
+    }
+}
