@@ -4,8 +4,8 @@
 //! under an identity of the case file, its mesh and the program version. A state's size does
 //! not grow with the steps: the step records (and their energy rows) go, one JSON line per
 //! converged step, to the journal `steps.jsonl` beside the states, appended as the steps
-//! converge, and the `.pvd` entries are read back from the `.pvd` file; a state names how many
-//! of each are its own. `stickslip run CASE --resume PATH` goes on
+//! converge, with whether each was written (the `.pvd` entries are made from those); a state
+//! names how many of the journal's lines are its own. `stickslip run CASE --resume PATH` goes on
 //! from such a state and writes what the uninterrupted run writes (timings apart): at every
 //! checkpoint the contact solver keeps only the factorisations the state records how to rebuild
 //! (the Delassus block and the batches of columns solved from it), and the resumed run rebuilds
@@ -38,8 +38,7 @@ pub struct SavedRun {
     pub checkpoint: Checkpoint,
     /// Records in the journal up to this state (its converged steps).
     pub steps: usize,
-    /// Entries of the `.pvd` up to this state.
-    pub pvd_entries: usize,
+    /// The `.pvd` entries up to this state, made from the journal's written steps.
     #[serde(skip)]
     pub pvd: Vec<PvdEntry>,
     pub energy: Option<EnergySaved>,
@@ -52,6 +51,31 @@ pub struct JournalLine {
     pub record: crate::report::StepRecord,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub energy: Option<crate::energy::EnergyRow>,
+    /// Whether the step's files were written (its `.pvd` entries).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub written: bool,
+}
+
+/// The `.pvd` entries of the written steps among `lines`, as [`crate::output::series`] names
+/// a step's files (case `stem`).
+pub fn pvd_entries(lines: &[JournalLine], stem: &str) -> Vec<PvdEntry> {
+    let mut entries = Vec::new();
+    for l in lines.iter().filter(|l| l.written) {
+        let (step, time) = (l.record.step, l.record.time);
+        entries.push(PvdEntry {
+            time,
+            part: 0,
+            file: crate::output::series::bodies_file_name(stem, step),
+        });
+        if l.record.contact.is_some() {
+            entries.push(PvdEntry {
+                time,
+                part: 1,
+                file: crate::output::series::contact_file_name(stem, step),
+            });
+        }
+    }
+    entries
 }
 
 /// The journal's text for `lines`.
@@ -84,37 +108,6 @@ fn read_journal(dir: &Path, n: usize) -> Result<Vec<JournalLine>, String> {
         ));
     }
     Ok(lines)
-}
-
-/// The first `n` entries of the `.pvd` file `path`.
-fn read_pvd(path: &Path, n: usize) -> Result<Vec<PvdEntry>, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let attr = |l: &str, key: &str| -> Option<String> {
-        let rest = l.split(&format!(" {key}=\"")).nth(1)?;
-        Some(rest[..rest.find('"')?].to_string())
-    };
-    let entries: Vec<PvdEntry> = text
-        .lines()
-        .filter(|l| l.trim_start().starts_with("<DataSet"))
-        .take(n)
-        .map(|l| {
-            Some(PvdEntry {
-                time: attr(l, "timestep")?.parse().ok()?,
-                part: attr(l, "part")?.parse().ok()?,
-                file: attr(l, "file")?,
-            })
-        })
-        .collect::<Option<_>>()
-        .ok_or_else(|| format!("{}: a DataSet line that cannot be read", path.display()))?;
-    if entries.len() < n {
-        return Err(format!(
-            "{} holds {} entries, fewer than the state's {n}",
-            path.display(),
-            entries.len()
-        ));
-    }
-    Ok(entries)
 }
 
 /// The identity a state must carry to resume `case` (read from `case_path`): the bytes of the
@@ -192,8 +185,7 @@ pub fn load(path: &Path, case: &Case, case_path: &Path) -> Result<SavedRun, RunE
             .file_stem()
             .map(|s| s.to_string_lossy().to_string())
             .unwrap_or("case".into());
-        saved.pvd = read_pvd(&dir.join(format!("{stem}.pvd")), saved.pvd_entries)
-            .map_err(|why| bad(&file, why))?;
+        saved.pvd = pvd_entries(&lines, &stem);
         if let Some(e) = saved.energy.as_mut() {
             e.set_rows(lines.iter().filter_map(|l| l.energy.clone()).collect());
         }

@@ -196,6 +196,10 @@ pub fn run_model(
             why: "its contact state does not fit the model built from the case".into(),
         });
     }
+    // Loads that no step can carry are refused before anything is written.
+    if resume.is_none() {
+        crate::driver::refuse_unloadable(&model, case, model.friction.as_ref())?;
+    }
     std::fs::create_dir_all(out_dir).map_err(|source| RunError::Write {
         path: out_dir.display().to_string(),
         source,
@@ -237,6 +241,10 @@ pub fn run_model(
                 .map(|(i, r)| restart::JournalLine {
                     record: r.clone(),
                     energy: rows.as_ref().and_then(|rows| rows.get(i).cloned()),
+                    written: s.pvd.iter().any(|e| {
+                        e.part == 0
+                            && e.file == crate::output::series::bodies_file_name(&stem, r.step)
+                    }),
                 })
                 .collect();
             restart::journal_text(&lines)
@@ -288,6 +296,7 @@ pub fn run_model(
                     let line = restart::JournalLine {
                         record: ev.record.clone(),
                         energy: energy.as_ref().and_then(|m| m.last_row().cloned()),
+                        written: picked,
                     };
                     let text = restart::journal_text(std::slice::from_ref(&line));
                     let journal_error = |source| RunError::Write {
@@ -335,9 +344,6 @@ pub fn run_model(
                         candidate_gap,
                         checkpoint: c.clone(),
                         steps: ev.step,
-                        // The writer fills in the count of `.pvd` entries written with the
-                        // step's files.
-                        pvd_entries: 0,
                         pvd: Vec::new(),
                         energy: energy.as_ref().map(EnergyMeter::saved),
                     }),

@@ -143,6 +143,7 @@ fn write_error_stops_the_run_with_the_earlier_steps_kept() {
             "contact_0002.csv",
             "state_0001.json",
             "state_0002.json",
+            "steps.jsonl",
         ]
     );
     let pvd = std::fs::read_to_string(out.join("case.pvd")).unwrap();

@@ -1036,6 +1036,21 @@ fn cli_cases() -> Vec<CliCase> {
             Refused(5, &["equilibrium lost", "Q_max = 0.37"]),
         ),
         cli(
+            "frictionless, pilot_x left to force control",
+            "`cases/hertz.json` on L0 with `\"pilot_x\": {\"force\": 0.0}`: nothing holds the upper body along x",
+            hertz_edit(|v| v["stages"][0]["pilot_x"] = json!({"force": 0.0})),
+            Refused(2, &["`pilot_x`", "give `pilot_x` a displacement"]),
+        ),
+        cli(
+            "Q/P above μ at every load",
+            "`cases/vm272_cm.json` on L0 as one stage driving `pilot_x` 2.5 and `pilot_y` −10 together from no load, μ = 0.2",
+            cm_edit(|v| {
+                v["stages"] = json!([{"name": "both", "steps": 4,
+                    "pilot_x": {"force": 2.5}, "pilot_y": {"force": -10.0}}]);
+            }),
+            Refused(2, &["Q/P = 0.250000", "0.200000"]),
+        ),
+        cli(
             "lifted by displacement",
             "`cases/hertz.json` on L0 with `\"pilot_y\": {\"displacement\": 0.1}` (the pilot holds the body; the contact opens)",
             hertz_edit(|v| v["stages"][0]["pilot_y"] = json!({"displacement": 0.1})),

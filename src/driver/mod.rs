@@ -198,7 +198,7 @@ pub fn simulate_with(
         checkpoint_every: restart.every,
     };
     if restart.from.is_none() {
-        free_direction(model, case, d.law.as_ref())?;
+        refuse_unloadable(model, case, d.law.as_ref())?;
     }
     let mut resume = restart.from.map(|c| d.restore(c));
     let first = resume.as_ref().map_or(0, |r| r.0);
@@ -225,13 +225,56 @@ pub fn simulate_with(
     })
 }
 
+/// Refuses, before the first step, the load paths that no step can carry: a free pilot axis
+/// ([`free_direction`]) and a first stage above the friction coefficient at every load
+/// ([`beyond_friction_at_start`]).
+pub fn refuse_unloadable(
+    model: &Model,
+    case: &Case,
+    law: Option<&FrictionLaw>,
+) -> Result<(), RunError> {
+    free_direction(model, case, law)?;
+    beyond_friction_at_start(model, case, law)
+}
+
+/// A first stage that drives both pilot forces in proportion from no load and asks for a
+/// tangential force above the largest friction coefficient times the normal force, `|Q| >
+/// max_u f(u) |P|`, at every load of the stage: Coulomb's law gives no equilibrium anywhere on
+/// it (the pilot is the only load of its body: the case has no traction loads, so the
+/// contact's resultant is the pilot's force).
+pub fn beyond_friction_at_start(
+    model: &Model,
+    case: &Case,
+    law: Option<&FrictionLaw>,
+) -> Result<(), RunError> {
+    let (Some(law), Some(stage), Some(_)) = (law, case.stages.first(), model.dofs.pilot) else {
+        return Ok(());
+    };
+    let (Some(Control::Force(q)), Some(Control::Force(p))) = (stage.pilot_x, stage.pilot_y) else {
+        return Ok(());
+    };
+    let mu = law.mu_max();
+    if stage.traction_scale.is_some_and(|v| v != 0.0) || q.abs() <= mu * p.abs() {
+        return Ok(());
+    }
+    Err(RunError::Step(StepFailure {
+        step: 1,
+        cause: StepError::BeyondFriction { q, p, mu },
+        cutbacks: None,
+    }))
+}
+
 /// Refuses, before the first step, a pilot axis that nothing holds: the pilot drives a body
 /// that no support holds, the contact is frictionless, and a stage leaves the pilot's
 /// tangential axis (across the direction that separates the bodies) force-controlled. A
 /// frictionless contact carries no force along it, so the Newton system of every step is
 /// singular in that direction. (A pilot axis keeps its control from stage to stage; before the
 /// first stage that sets it, it is force-controlled at zero.)
-fn free_direction(model: &Model, case: &Case, law: Option<&FrictionLaw>) -> Result<(), RunError> {
+pub fn free_direction(
+    model: &Model,
+    case: &Case,
+    law: Option<&FrictionLaw>,
+) -> Result<(), RunError> {
     let (Some((body, sep)), None, Some(_)) = (model.pilot_separation, law, &model.contact) else {
         return Ok(());
     };
@@ -367,11 +410,6 @@ impl Driver<'_> {
             None,
         ));
         let target = [stage.pilot_x, stage.pilot_y];
-        if alpha == 0.0
-            && let Some(why) = self.beyond_friction_throughout(&start, target, stage)
-        {
-            return Ok(self.stop(self.records.len() + 1, why, None));
-        }
         // The next nominal fraction to reach: `k_next / steps`.
         let mut k_next = next_nominal(alpha, stage.steps);
         // Failed attempts since the last nominal fraction reached.
@@ -564,26 +602,6 @@ impl Driver<'_> {
         self.case.stages[..si].iter().map(|s| s.steps).sum()
     }
 
-    /// A stage that starts unloaded and drives both pilot forces in proportion, asking for a
-    /// tangential force above the largest friction coefficient times the normal force at every
-    /// load of the stage: Coulomb's law gives no equilibrium anywhere on it (the pilot is the
-    /// only load of its body, and the contact's resultant is the pilot's force).
-    fn beyond_friction_throughout(
-        &self,
-        start: &StageStart,
-        target: [Option<Control>; 2],
-        stage: &Stage,
-    ) -> Option<StepError> {
-        let law = self.law.as_ref()?;
-        let (Some(Control::Force(q)), Some(Control::Force(f))) = (target[0], target[1]) else {
-            return None;
-        };
-        let unloaded = start.pilot.fx == 0.0 && start.pilot.fy == 0.0 && self.records.is_empty();
-        let loaded_otherwise = start.scale != 0.0 || stage.traction_scale.is_some_and(|v| v != 0.0);
-        let mu = law.mu_max();
-        (unloaded && !loaded_otherwise && self.model.dofs.pilot.is_some() && q.abs() > mu * f.abs())
-            .then_some(StepError::BeyondFriction { q, p: f, mu })
-    }
     /// One contact solve from the committed state `prev` to the fraction `a.1` of the stage
     /// (from `a.0`), with a predictor from the state `older` before it.
     fn contact_attempt(

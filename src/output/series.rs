@@ -50,6 +50,16 @@ fn write_error(path: &Path, source: std::io::Error) -> RunError {
     }
 }
 
+/// The name of the bodies dataset of `step` (case `stem`).
+pub fn bodies_file_name(stem: &str, step: usize) -> String {
+    format!("{stem}_{step:04}.vtu")
+}
+
+/// The name of the contact-face dataset of `step` (case `stem`).
+pub fn contact_file_name(stem: &str, step: usize) -> String {
+    format!("{stem}_contact_{step:04}.vtu")
+}
+
 /// The name of the contact table of `step`.
 fn contact_csv_name(step: usize) -> String {
     format!("contact_{step:04}.csv")
@@ -158,7 +168,7 @@ impl Bodies<'_> {
 
     /// The file name of a step's bodies dataset.
     fn bodies_name(&self, s: &StepOutput) -> String {
-        format!("{}_{:04}.vtu", self.stem, s.step)
+        bodies_file_name(self.stem, s.step)
     }
 
     /// The step-independent bytes of the bodies datasets `paths`, written ahead to their
@@ -385,7 +395,7 @@ impl<'a> Series<'a> {
         });
         let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
         if let Some(st) = &s.contact {
-            let cname = format!("{stem}_contact_{step:04}.vtu");
+            let cname = contact_file_name(stem, step);
             files.push((dir.join(&cname), contact_vtu(model, st, compress)));
             self.entries.push(PvdEntry {
                 time: s.time,
@@ -404,8 +414,7 @@ impl<'a> Series<'a> {
             pvd(&self.entries).into_bytes(),
         ));
         // The state to resume from, after the step's files.
-        if let Some(mut saved) = s.state {
-            saved.pvd_entries = self.entries.len();
+        if let Some(saved) = s.state {
             files.push((
                 dir.join(restart::state_name(step)),
                 serde_json::to_string(&saved)
