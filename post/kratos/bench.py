@@ -157,6 +157,11 @@ def run_kratos(args, case, level, nsteps, tsteps):
     rec["newton_iterations"] = rec.get("iterations")
     x, p = kv.final_xp(os.path.join(REPO, rec["dir"], "contact.csv"))
     rec["p_integral"] = p_integral(x, p) if x else None
+    rec["kratos_import_s"] = rec.get("import_s")
+    rec["kratos_initialize_s"] = rec.get("initialize_s")
+    rec["kratos_loop_s"] = rec.get("solve_loop_s")
+    if rec.get("steps_run"):
+        rec["iterations_per_step"] = rec["iterations"] / rec["steps_run"]
     rec["settings"] = f"{nsteps} normal" + (f" + {tsteps} tangential" if spec["frictional"] else "") + " increments"
     return rec
 
@@ -167,7 +172,8 @@ def run_kratos(args, case, level, nsteps, tsteps):
 ERR_KEYS = ("p_err_max", "p_err_rms", "q_err_max", "q_err_rms", "c_err_rel", "a_fe_over_a", "p_integral")
 COLS = ["case", "code", "level", "elements", "nodes", "dofs", "threads", "reps", "wall_s", "wall_min_s",
         "wall_max_s", "walls_s", "newton_iterations", "p_err_max", "p_err_rms", "q_err_max", "q_err_rms",
-        "c_err_rel", "a_fe_over_a", "p_integral", "status", "settings"]
+        "c_err_rel", "a_fe_over_a", "p_integral", "status", "settings", "iterations_per_step",
+        "steps_not_converged", "kratos_import_s", "kratos_initialize_s", "kratos_loop_s", "max_rss_mib"]
 
 
 def merge(recs):
@@ -179,6 +185,10 @@ def merge(recs):
     r0["wall_min_s"] = min(walls)
     r0["wall_max_s"] = max(walls)
     r0["walls_s"] = ";".join(f"{w:.3f}" for w in walls)
+    for k in ("kratos_import_s", "kratos_initialize_s", "kratos_loop_s"):
+        vals = [r[k] for r in recs if r.get(k) is not None]
+        if vals:
+            r0[k] = statistics.median(vals)
     statuses = sorted({r["status"] for r in recs})
     r0["status"] = statuses[0] if len(statuses) == 1 else " / ".join(statuses)
     for k in ERR_KEYS:
@@ -233,6 +243,8 @@ def main():
     ap.add_argument("--bin", default=os.path.join(REPO, "target", "release", "stickslip"))
     ap.add_argument("--normal-steps", default="0:5,3:10,4:20,5:40",
                     help="Kratos normal increments per level, e.g. '5' or '0:5,4:20'")
+    ap.add_argument("--cm-normal-steps", default="20",
+                    help="Kratos normal increments of the frictional cases (5 diverges; see docs/kratos.md)")
     ap.add_argument("--tangential-steps", default="10", help="Kratos tangential increments per level")
     ap.add_argument("--kratos-args", default="{}", help="JSON of further kratos_vm272 options, e.g. '{\"f_stick_res_rtol\": 1e-3}'")
     ap.add_argument("--kratos-timeout", type=float, default=1800.0)
@@ -260,6 +272,7 @@ def main():
     k_levels = parse_levels(args.kratos_levels)
     k_cm_levels = parse_levels(args.kratos_cm_levels) if args.kratos_cm_levels is not None else k_levels
     nsteps = parse_per_level(args.normal_steps, 5)
+    cm_nsteps = parse_per_level(args.cm_normal_steps, 20)
     tsteps = parse_per_level(args.tangential_steps, 10)
     runs = {}
     t_all = time.perf_counter()
@@ -272,7 +285,8 @@ def main():
                     runs.setdefault(("stickslip", case, level), []).append(r)
                     print(f"rep {rep} {case} L{level} stickslip {r['wall_s']:.2f} s {r['status']}", file=sys.stderr, flush=True)
                 if level in kl:
-                    r = run_kratos(args, case, level, nsteps(level), tsteps(level))
+                    ns = cm_nsteps(level) if CASES[case]["frictional"] else nsteps(level)
+                    r = run_kratos(args, case, level, ns, tsteps(level))
                     runs.setdefault(("kratos", case, level), []).append(r)
                     print(f"rep {rep} {case} L{level} kratos {r['wall_s']:.2f} s {r['status']} p_err_max={fmt(r.get('p_err_max'))} q_err_max={fmt(r.get('q_err_max'))}",
                           file=sys.stderr, flush=True)
@@ -323,9 +337,11 @@ def write_outputs(args, runs, cases, binary, bin_hash, git, elapsed, reps_done):
                     out(f"| {r['level']} | {r['wall_s']:.2f} | {fmt(e)} | — | — | {r['status']} |")
                     continue
                 t, note = time_at_error(fr, e)
-                out(f"| {r['level']} | {r['wall_s']:.2f} | {e:.4f} | {fmt(t, 3)} | "
-                    f"{(('≥ ' if note == '≤' else '') + f'{r['wall_s'] / t:.0f}') if t else '—'} | "
-                    f"{'our cheapest level is already as accurate' if note == '≤' else note} |")
+                ratio = "—"
+                if t:
+                    ratio = ("≥ " if note == "≤" else "") + f"{r['wall_s'] / t:.0f}"
+                why = "our cheapest level is already as accurate" if note == "≤" else note
+                out(f"| {r['level']} | {r['wall_s']:.2f} | {e:.4f} | {fmt(t, 3)} | {ratio} | {why} |")
     with open(os.path.splitext(args.csv)[0] + ".md", "w") as fh:
         fh.write("\n".join(md) + "\n")
     print("\n".join(md))

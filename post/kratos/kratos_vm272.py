@@ -230,7 +230,7 @@ def project_parameters(args, frictional):
         _merge(process, json.loads(args.process_json))
     if args.contact_json:
         _merge(cs, json.loads(args.contact_json))
-    return {
+    pp = {
         "problem_data": {"problem_name": "vm272", "parallel_type": "OpenMP", "echo_level": args.echo,
                          "start_time": 0.0, "end_time": 2.0 if frictional else 1.0},
         "solver_settings": {
@@ -260,6 +260,9 @@ def project_parameters(args, frictional):
         }]},
         "output_processes": {},
     }
+    if args.solver_json:
+        _merge(pp["solver_settings"], json.loads(args.solver_json))
+    return pp
 
 
 # ------------------------------------------------------------------------------------------
@@ -329,12 +332,31 @@ def solve(workdir):
             fx = d["Q"] * max(t - 1.0, 0.0) if d["frictional"] else 0.0
             for cnd in mp.GetSubModelPart("pilot").Conditions:
                 cnd.SetValue(SMA.POINT_LOAD, KM.Array3([fx, fy, 0.0]))
+            if d["frictional"] and d.get("frictionless_normal_stage"):
+                # mu = 0 while P is applied (identical materials: no shear in the exact
+                # solution), the Coulomb coefficient from the first tangential increment on
+                mu = 0.0 if t <= 1.0 + 1e-12 else d["mu"]
+                for prop in self._contact_properties(mp):
+                    prop[KM.FRICTION_COEFFICIENT] = mu
             pilot = mp.GetNode(d["pilot"])
             if t <= 1.0 + 1e-12:
                 pilot.Fix(KM.DISPLACEMENT_X)
                 pilot.SetSolutionStepValue(KM.DISPLACEMENT_X, 0.0)
             else:
                 pilot.Free(KM.DISPLACEMENT_X)
+
+        def _contact_properties(self, mp):
+            found = []
+
+            def walk(part):
+                for sub in part.SubModelParts:
+                    if sub.Name.startswith("ContactSub"):
+                        found.extend(sub.GetProperties())
+                    walk(sub)
+            walk(mp)
+            if not found:
+                raise RuntimeError("no ContactSub* model part: cannot set the friction coefficient")
+            return found
 
         def RunSolutionLoop(self):
             mp = self.model["Structure"]
@@ -361,10 +383,20 @@ def solve(workdir):
             rows = []
             for n in mp.GetSubModelPart("lower_arc").Nodes:
                 p = n.GetValue(CSMA.AUGMENTED_NORMAL_CONTACT_PRESSURE)
-                q = n.GetValue(CSMA.AUGMENTED_TANGENT_CONTACT_PRESSURE) if d["frictional"] else 0.0
+                q = 0.0
+                tv = nv = (0.0, 0.0, 0.0)
+                if d["frictional"]:
+                    # the tangential traction is a vector: its component along the tangent
+                    # t = (n_y, -n_x) of the slave normal n, oriented to have t_x > 0
+                    tv = n.GetValue(CSMA.AUGMENTED_TANGENT_CONTACT_PRESSURE)
+                    nv = n.GetSolutionStepValue(KM.NORMAL)
+                    tx, ty = nv[1], -nv[0]
+                    if tx < 0:
+                        tx, ty = -tx, -ty
+                    q = tv[0] * tx + tv[1] * ty
                 rows.append((n.Id, n.X0, n.Y0, p, q, int(n.Is(KM.ACTIVE)), int(n.Is(KM.SLIP)),
                              n.GetSolutionStepValue(KM.DISPLACEMENT_X),
-                             n.GetSolutionStepValue(KM.DISPLACEMENT_Y)))
+                             n.GetSolutionStepValue(KM.DISPLACEMENT_Y), tv[0], tv[1], nv[0], nv[1]))
             ry = sum(n.GetSolutionStepValue(KM.REACTION_Y) for n in mp.GetSubModelPart("bottom").Nodes)
             rx = sum(n.GetSolutionStepValue(KM.REACTION_X) for n in mp.GetSubModelPart("bottom").Nodes)
             return {"rows": rows, "pilot_u": [pilot.GetSolutionStepValue(KM.DISPLACEMENT_X),
@@ -383,10 +415,11 @@ def solve(workdir):
     rec["dofs"] = int(sim._GetSolver()._GetBuilderAndSolver().GetEquationSystemSize()) \
         if hasattr(sim._GetSolver()._GetBuilderAndSolver(), "GetEquationSystemSize") else None
     with open("contact.csv", "w") as fh:
-        fh.write("step,node,x,y,p,q,active,slip,ux,uy\n")
+        fh.write("step,node,x,y,p,q,active,slip,ux,uy,tx,ty,nx,ny\n")
         for name, s in snapshots.items():
             for r in s["rows"]:
-                fh.write(f"{name},{r[0]},{r[1]:.12g},{r[2]:.12g},{r[3]:.12g},{r[4]:.12g},{r[5]},{r[6]},{r[7]:.12g},{r[8]:.12g}\n")
+                fh.write(f"{name},{r[0]},{r[1]:.12g},{r[2]:.12g},{r[3]:.12g},{r[4]:.12g},{r[5]},{r[6]},"
+                         + ",".join(f"{v:.12g}" for v in r[7:]) + "\n")
     rec["snapshots"] = {k: {kk: vv for kk, vv in s.items() if kk != "rows"} for k, s in snapshots.items()}
     rec["child_total_s"] = time.perf_counter() - t0
     rec["max_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
@@ -418,8 +451,9 @@ def prepare(args, level, outdir, frictional):
     with open(os.path.join(outdir, "ProjectParameters.json"), "w") as fh:
         json.dump(project_parameters(args, frictional), fh, indent=2)
     drv = {"pilot": facts["pilot"], "top_nodes": facts["top_nodes"], "frictional": frictional,
-           "P": P_LOAD, "Q": args.q if frictional else 0.0,
-           "normal_steps": args.normal_steps, "tangential_steps": args.tangential_steps}
+           "P": args.load, "Q": args.q if frictional else 0.0,
+           "normal_steps": args.normal_steps, "tangential_steps": args.tangential_steps,
+           "mu": args.mu, "frictionless_normal_stage": args.frictionless_normal_stage}
     with open(os.path.join(outdir, "driver.json"), "w") as fh:
         json.dump(drv, fh)
     return facts
@@ -524,6 +558,8 @@ def build_parser():
     ap.add_argument("--tag", help="subdirectory of --out instead of the case name")
     ap.add_argument("--q", type=float, default=0.936, help="tangential load Q, N/mm (cm)")
     ap.add_argument("--mu", type=float, default=MU)
+    ap.add_argument("--load", type=float, default=P_LOAD,
+                    help="normal load P, N/mm (the scores assume 10; other values for experiments)")
     ap.add_argument("--normal-steps", type=int, default=5)
     ap.add_argument("--tangential-steps", type=int, default=10)
     ap.add_argument("--max-iterations", type=int, default=30)
@@ -535,6 +571,8 @@ def build_parser():
                     help="stick: |q| < mu p (1 - slip_tol), as in the CalculiX driver")
     ap.add_argument("--timeout", type=float, default=1800.0)
     ap.add_argument("--echo", type=int, default=0, help="solver echo level (timings of the builder)")
+    ap.add_argument("--frictionless-normal-stage", action="store_true",
+                    help="friction coefficient 0 while P is applied, mu from the first tangential increment")
     ap.add_argument("--no-mixed-ulm", action="store_true", help="use_mixed_ulm_solver = false")
     ap.add_argument("--f-stick-disp-rtol", type=float)
     ap.add_argument("--f-stick-res-rtol", type=float)
@@ -545,6 +583,7 @@ def build_parser():
     ap.add_argument("--penalty-scale", type=float)
     ap.add_argument("--process-json", help="JSON merged into the alm_contact_process Parameters")
     ap.add_argument("--contact-json", help="JSON merged into solver_settings.contact_settings")
+    ap.add_argument("--solver-json", help="JSON merged into solver_settings")
     return ap
 
 
