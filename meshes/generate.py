@@ -300,6 +300,16 @@ every scene it draws with it.
   the sizes used, node and triangle counts and the chord range along the fine zone).
 * The written file is re-opened and checked as above (groups, element types, orientation,
   face nodes on their circle or line, no shared node); output is deterministic.
+
+## Two cylinders (`two_cylinders.py`)
+
+The worked example of "Bring your own mesh" in the top-level README: two half-cylinders of
+radii 12 mm (`lower_body`) and 5 mm (`upper_body`), sized for the Hertz semi-width of
+`cases/own_mesh.json` (a = 0.3197 mm, h = a/20 over |x| <= 1.5a), with the groups of the VM272
+meshes. Its docstring lists what stickslip needs from a mesh. It is not run by `generate.py`
+and its mesh is not committed: `python3 meshes/two_cylinders.py` writes
+`meshes/two_cylinders.msh` (options `--r-lower --r-upper --a --per-a --growth --out`), and
+`tests/own_mesh.rs` builds it and runs the case.
 """
 
 

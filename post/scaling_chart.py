@@ -8,8 +8,8 @@ Reads the CSV written by `cargo bench --bench scaling` (one row per level) and d
 of `summary.json` (assemble, analyse, factorise, condense = the Delassus operator, the contact
 Newton part of solve, write, write wait), the floor (assemble + analyse + factorise) and the
 process wall time, each labelled with its least-squares exponent over the levels given by
---fit (default 3-7), with N^1 and N^1.5 guide slopes. Where the CSV has them (from the
-twenty-second session on), a second panel draws the factorisation's modelled operations
+--fit (default 3-7), with N^1 and N^1.5 guide slopes. Where the CSV has them (the
+`factor_*` columns), a second panel draws the factorisation's modelled operations
 (`factor_flops` of the summary: K̂ itself, the coupling the constraint rows add, the constraint
 block) with their exponents: counts, not times, the same on every machine.
 """

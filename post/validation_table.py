@@ -1,23 +1,21 @@
 #!/usr/bin/env python3
-"""Assembles the README's validation table from the rows the tests write.
+"""Assembles the validation table of docs/validation.md from the rows the tests write.
 
 Each row of the table is written by the test that asserts it (``validation_row`` in
 ``tests/common/mod.rs``) to ``docs/validation/<key>.md`` when ``VALIDATION_WRITE_DOC`` is set;
 sorting the file names gives the row order. This script puts the rows, sorted, under the
-header ``| check | reference | result | test |`` and
-
-* replaces the table in README.md between ``<!-- validation-table:start -->`` and
-  ``<!-- validation-table:end -->``;
-* writes docs/validation.md (the same table, its links made relative to docs/, and a line
-  saying how it was generated).
+header ``| check | reference | result | test |`` and replaces the table in docs/validation.md
+between ``<!-- validation-table:start -->`` and ``<!-- validation-table:end -->`` (the rows'
+links, written relative to the repository's root, made relative to docs/). The prose around
+the markers is the page's own.
 
 Usage, from anywhere in the repository::
 
     VALIDATION_WRITE_DOC=1 cargo test --release
     python3 post/validation_table.py
 
-``tests/validation_doc.rs`` fails when either table differs from what the committed rows
-assemble to. Files are written to a temporary name and renamed.
+``tests/validation_doc.rs`` fails when the table differs from what the committed rows assemble
+to. The file is written to a temporary name and renamed.
 """
 
 import os
@@ -72,20 +70,11 @@ def write(path, text):
 
 def main():
     table, n = assemble()
-    readme = ROOT / "README.md"
-    write(readme, replace_table(readme.read_text(encoding="utf-8"), table, "README.md"))
-    doc = (
-        "# Validation\n\n"
-        "What the tests check and what they measured. Every row is written by the test named in "
-        "its last column, right after the assertions it reports, with the numbers of that run "
-        "(`docs/validation/<key>.md`); this file and the table in the README were assembled from "
-        "those rows by `python3 post/validation_table.py` after "
-        "`VALIDATION_WRITE_DOC=1 cargo test --release`. Do not edit the table by hand: "
-        "`tests/validation_doc.rs` fails when it differs from the rows.\n\n"
-        f"{START}\n{table.replace('](docs/', '](')}\n{END}\n"
-    )
-    write(ROOT / "docs" / "validation.md", doc)
-    print(f"{n} rows: README.md and docs/validation.md")
+    doc = ROOT / "docs" / "validation.md"
+    text = replace_table(doc.read_text(encoding="utf-8"), table.replace("](docs/", "]("),
+                         "docs/validation.md")
+    write(doc, text)
+    print(f"{n} rows: docs/validation.md")
 
 
 if __name__ == "__main__":

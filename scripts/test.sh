@@ -42,6 +42,8 @@ provision() {
 }
 if ! provision; then
     echo "scripts/test.sh: could not install ${PACKAGES[*]} (see the messages above)."
+    echo "  Python's venv module may be missing (Debian/Ubuntu: apt-get install python3-venv), or"
+    echo "  the package index unreachable; STICKSLIP_TEST_VENV=DIR puts the environment elsewhere."
     echo "tests: 0 passed, 1 failed"
     exit 1
 fi

@@ -4,11 +4,56 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// Exit statuses, as `src/error.rs` maps them (`RunError::exit_code`, `SweepError::exit_code`).
+const EXIT_ALL: &str = "\
+Exit status (every command):
+  0    success
+  2    bad input: a case, sweep or mesh file, an option or a value; nothing is written
+  3    solver failure, or an error-level self-check failed (run: the steps before it are kept;
+       sweep-merge: rows are missing)
+  4    output error (a file, or standard output, could not be written)
+  5    run: equilibrium lost under a force-controlled tangential load (Q_max reported)
+  101  a bug (a panic): please report it with the case
+
+Cases, outputs and every option: README.md. The closed forms: docs/analytic.md.";
+
+const EXIT_RUN: &str = "\
+Exit status:
+  0  the run completed (failed warning-level self-checks are printed; the run completes)
+  2  bad input (the case, its mesh, an option, a --resume state); nothing is written
+  3  solver failure, or an error-level self-check failed; the steps before it are kept and
+     summary.json's `status` says where it stopped
+  4  output error; the steps before it are kept
+  5  equilibrium lost under a force-controlled tangential load: Q_max is bracketed and
+     reported (summary.json `friction.q_max`), the state just before it kept; with --quiet
+     nothing is printed for it";
+
+const EXIT_SWEEP: &str = "\
+Exit status:
+  0  every row ran (each row's status and failed self-checks are in sweep.csv and sweep.json)
+  2  bad input (the case, the sweep file, --shard, a part of another sweep); nothing is written
+  3  the model could not be factorised
+  4  output error";
+
+const SWEEP_FILE: &str = "\
+The sweep file lists laws and/or loads; each row is one law under one load:
+  {\"friction\": [law, ...]}                 laws as in a case's contact.friction
+  {\"grid\": {\"shape\": [\"ramp\", \"step\"], \"fs\": [0.15, 0.2], \"fd\": [0.1],
+            \"delta\": [2e-4, 5e-4]}}          laws: the Cartesian product (shape default
+                                            [\"ramp\"]; \"lambda\": [...] with \"radius\" and
+                                            \"load\" instead of \"delta\"; \"history\": [...])
+  {\"grid\": {\"pilot_x\": [{\"force\": 0.5}, {\"slip\": 0.01}]}}
+                                            loads: targets of the case's last stage along x
+  {\"stages\": [[stage, ...], ...]}           loads: whole replacements of the case's stages
+Row r = load_index * laws + law_index, loads outermost, then shape, fs, fd, delta/lambda.
+`f_s`/`f_d`, the old spelling of `fs`/`fd`, are read with a note.";
+
 #[derive(Parser)]
 #[command(
     name = "stickslip",
     version,
-    about = "Plane-strain FE for frictional contact of two half-cylinders with slip-weakening friction"
+    about = "Plane-strain FE for frictional contact of two half-cylinders with slip-weakening friction",
+    after_help = EXIT_ALL
 )]
 struct Cli {
     #[command(subcommand)]
@@ -18,6 +63,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Cmd {
     /// Run a case file and write VTK, CSV and JSON output.
+    #[command(after_help = EXIT_RUN)]
     Run {
         /// The case file (JSON).
         case: PathBuf,
@@ -27,7 +73,8 @@ enum Cmd {
         /// Number of threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
-        /// Print nothing but errors.
+        /// Print nothing but errors: no progress, no warnings, no end summary (the output files
+        /// are the same).
         #[arg(long)]
         quiet: bool,
         /// How much to print: error, warn, info (progress and end summary), debug (every
@@ -50,12 +97,14 @@ enum Cmd {
     },
     /// Run one case against many friction laws and/or loads on one shared model, in parallel,
     /// and write one table (CSV and JSON).
+    #[command(after_help = format!("{SWEEP_FILE}\n\n{EXIT_SWEEP}"))]
     Sweep {
         /// The case file (JSON); its friction law and its stages are replaced by each law and
         /// each load of the sweep.
         case: PathBuf,
-        /// The sweep file: {"friction": [law, …], "stages": [[stage, …], …]} with laws as in a
-        /// case's `contact.friction` and loads as whole `stages` lists; either may be absent.
+        /// The sweep file (JSON): laws as a list (`friction`) or a grid (`grid`: shape, fs, fd,
+        /// delta or lambda), loads as stage lists (`stages`) or targets (`grid.pilot_x`); see
+        /// below.
         sweep: PathBuf,
         /// Output directory (default: out/<case name>_sweep).
         #[arg(long)]
@@ -63,6 +112,8 @@ enum Cmd {
         /// Number of threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// Print nothing but errors: no summary line, no resume, cache or spelling notes (the
+        /// table is the same).
         #[arg(long)]
         quiet: bool,
         /// Run shard K of N only (rows r with r mod N = K, K from 0), appending them to
@@ -85,6 +136,11 @@ enum Cmd {
     },
     /// Merge the parts of a sharded sweep (part_K_of_N.jsonl in each DIR) into sweep.csv and
     /// sweep.json; refuses parts of different sweeps and reports rows no part holds.
+    #[command(
+        after_help = "Exit status:\n  0  merged\n  2  not a sweep part, or parts of \
+        different sweeps; nothing is written\n  3  rows are missing (listed); nothing is written\n  \
+        4  output error"
+    )]
     SweepMerge {
         /// Directories holding parts (or part files).
         #[arg(required = true)]
@@ -93,11 +149,22 @@ enum Cmd {
         #[arg(long)]
         out: Option<PathBuf>,
     },
-    /// The paper's closed forms: scalars as JSON, curves as CSV.
+    /// The paper's closed forms: scalars as JSON, curves as CSV (`--case CASE` takes the
+    /// geometry, load and law from a case file).
+    #[command(
+        after_help = "Exit status:\n  0  success\n  2  bad arguments or values (the \
+        message names them)\n  4  standard output could not be written\n\nEvery subcommand \
+        with an example and its output: docs/analytic.md."
+    )]
     Analytic(stickslip::analytic::cli::AnalyticArgs),
     /// Print the JSON Schema of the case file.
+    #[command(after_help = "Exit status:\n  0  success\n  4  standard output could not be written")]
     Schema,
     /// Print counts, groups, element sizes and quality figures of a gmsh mesh (JSON).
+    #[command(
+        after_help = "Exit status:\n  0  success\n  2  the mesh cannot be read or \
+        parsed\n  4  standard output could not be written"
+    )]
     MeshInfo {
         /// The mesh file (gmsh MSH 4.1).
         mesh: PathBuf,
@@ -145,6 +212,9 @@ fn main() -> ExitCode {
                 eprintln!("error: {e}");
                 return ExitCode::from(2);
             }
+            if !quiet {
+                print_notes(&case, stickslip::case::deprecated_keys);
+            }
             let opts = stickslip::run::RunOptions {
                 out,
                 quiet,
@@ -180,6 +250,10 @@ fn main() -> ExitCode {
             if let Err(e) = set_threads(threads) {
                 eprintln!("error: {e}");
                 return ExitCode::from(2);
+            }
+            if !quiet {
+                print_notes(&case, stickslip::case::deprecated_keys);
+                print_notes(&sweep, stickslip::sweep::grid::deprecated_keys);
             }
             let res = shard
                 .as_deref()
@@ -227,7 +301,10 @@ fn main() -> ExitCode {
                 }
                 Err(e) => {
                     eprintln!("error: {e}");
-                    ExitCode::from(2)
+                    // As for `mesh-info` and `schema`: standard output that cannot be written is
+                    // an output error; everything else is a bad argument or value.
+                    let io = matches!(e, stickslip::analytic::cli::CliError::Io(_));
+                    ExitCode::from(if io { 4 } else { 2 })
                 }
             }
         }
@@ -244,6 +321,20 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+    }
+}
+
+/// Prints `note: FILE: …` for each note `notes` finds in the JSON file `path` (old spellings of
+/// keys). A file that cannot be read or parsed has none here: the command reports it.
+fn print_notes(path: &std::path::Path, notes: fn(&serde_json::Value) -> Vec<String>) {
+    let Some(v) = std::fs::read(path)
+        .ok()
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+    else {
+        return;
+    };
+    for n in notes(&v) {
+        eprintln!("note: {}: {n}", path.display());
     }
 }
 

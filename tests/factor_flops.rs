@@ -1,6 +1,6 @@
 //! The factorisation's modelled operations (`factor_flops` of `summary.json`) along the VM272
-//! ladder, L3–L7: the figures README.md and docs/benchmarks.md give for them ("Speed at
-//! scale", the twenty-second session). They are counts from the symbolic analysis of a
+//! ladder, L3–L7: the figures docs/benchmarks.md gives for them ("The factorisation's
+//! operations"). They are counts from the symbolic analysis of a
 //! deterministic ordering, the same on every machine and thread count, so they are asserted
 //! close to the documented values: the L5 parts, the L7 / L5 ratios and the fitted exponents.
 
@@ -46,8 +46,8 @@ fn flops_of(dir: &std::path::Path, l: usize) -> ([f64; 3], f64, f64) {
             "{line}"
         );
     }
-    // The first step's Newton iterations, the first contact from Hertz's contact set (README,
-    // "Twenty-third session": 5 on L5 instead of 14, 7 on L7 instead of 16; L3's zone is below
+    // The first step's Newton iterations, the first contact from Hertz's contact set
+    // (docs/benchmarks.md, "What each mechanism buys": 5 on L5, 7 on L7; L3's zone is below
     // the frictionless start's 512 contact unknowns).
     let first = s["steps"][0]["iterations"].as_u64().unwrap();
     let want = [9, 5, 5, 6, 7][l - 3];
@@ -87,7 +87,7 @@ fn the_factorisation_operations_grow_along_the_ladder_as_documented() {
     }
     let at = |l: usize| runs.iter().find(|r| r.0 == l).unwrap().1;
     let (f5, f7) = (at(5), at(7));
-    // README: L5 2.7e9, 3.1e9, 3.5e8 (docs: 2.69e9, 3.07e9, 3.54e8), to 0.5 %.
+    // docs/benchmarks.md: L5 2.69e9, 3.07e9, 3.54e8, to 0.5 %.
     close(f5[0], 2.69e9, 5e-3, "L5 K̂");
     close(f5[1], 3.07e9, 5e-3, "L5 coupling");
     close(f5[2], 3.54e8, 5e-3, "L5 constraint block");

@@ -1,10 +1,15 @@
-//! The README's validation table is generated: each row is written by the test that asserts it
-//! (`common::validation_row`, into `docs/validation/<key>.md` when `VALIDATION_WRITE_DOC` is
-//! set), and `post/validation_table.py` assembles the rows, sorted by file name, into README.md
-//! and docs/validation.md. This test fails when either table differs from what the committed
-//! rows assemble to (so the README cannot drift from the generated rows), when a row file is not
-//! one well-formed table line, or when a row's `test` column names no test binary, or one that
-//! does not write that row.
+//! The validation table of docs/validation.md is generated: each row is written by the test
+//! that asserts it (`common::validation_row`, into `docs/validation/<key>.md` when
+//! `VALIDATION_WRITE_DOC` is set), and `post/validation_table.py` assembles the rows, sorted by
+//! file name, between the markers of docs/validation.md. This test fails when the table differs
+//! from what the committed rows assemble to (so the page cannot drift from the generated rows),
+//! when a row file is not one well-formed table line, when a row's `test` column names no test
+//! binary, or one that does not write that row, and when README.md holds a copy of the table
+//! (it links to the page instead) or no link to it.
+//!
+//! The README's "accuracy to expect" table is generated too, by `post/accuracy_table.py` from
+//! the tables `tests/ladder.rs` writes into docs/convergence.md; it must be what the script
+//! prints.
 
 mod common;
 use common::{repo, validation_write_doc};
@@ -63,14 +68,44 @@ fn cells(line: &str) -> Vec<String> {
     out[1..out.len() - 1].to_vec()
 }
 
-/// The text between the markers of `file` (which must hold each marker once, in order).
+/// The text between the validation-table markers of `file` (each once, in order).
 fn between_markers(file: &str) -> String {
+    between(file, START, END)
+}
+
+/// The text of `file` between `start` and `end` (each once, in order).
+fn between(file: &str, start: &str, end: &str) -> String {
     let text = std::fs::read_to_string(repo().join(file)).unwrap();
-    assert_eq!(text.matches(START).count(), 1, "{file}: `{START}` once");
-    assert_eq!(text.matches(END).count(), 1, "{file}: `{END}` once");
-    let (a, b) = (text.find(START).unwrap(), text.find(END).unwrap());
+    assert_eq!(text.matches(start).count(), 1, "{file}: `{start}` once");
+    assert_eq!(text.matches(end).count(), 1, "{file}: `{end}` once");
+    let (a, b) = (text.find(start).unwrap(), text.find(end).unwrap());
     assert!(a < b, "{file}: markers out of order");
-    text[a + START.len()..b].trim().to_string()
+    text[a + start.len()..b].trim().to_string()
+}
+
+#[test]
+fn the_readme_accuracy_table_is_what_the_ladder_study_gives() {
+    let out = std::process::Command::new("python3")
+        .arg(repo().join("post/accuracy_table.py"))
+        .output()
+        .expect("python3 runs");
+    assert!(
+        out.status.success(),
+        "post/accuracy_table.py: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let want = String::from_utf8(out.stdout).unwrap().trim().to_string();
+    let got = between(
+        "README.md",
+        "<!-- accuracy-table:start -->",
+        "<!-- accuracy-table:end -->",
+    );
+    assert!(
+        got == want,
+        "README.md: the accuracy table differs from what `python3 post/accuracy_table.py` \
+         prints from docs/convergence.md; run `python3 post/accuracy_table.py --write README.md`\n\
+         README:\n{got}\nscript:\n{want}"
+    );
 }
 
 #[test]
@@ -104,39 +139,42 @@ fn every_row_is_one_table_line_written_by_the_test_it_names() {
 }
 
 #[test]
-fn readme_and_docs_tables_are_the_assembled_rows() {
+fn the_validation_page_holds_the_assembled_rows() {
     let rows = rows();
     let want = table(&rows);
-    let readme = between_markers("README.md");
+    let readme = std::fs::read_to_string(repo().join("README.md")).unwrap();
+    assert!(
+        !readme.contains(START) && !readme.contains(END),
+        "README.md holds a copy of the validation table: it links to docs/validation.md instead"
+    );
+    assert!(
+        readme.contains("](docs/validation.md)"),
+        "README.md does not link to docs/validation.md"
+    );
+    let doc = between_markers("docs/validation.md");
     if validation_write_doc() {
         // The rows are being rewritten by this very run; `python3 post/validation_table.py`
-        // assembles them afterwards (and writes docs/validation.md whole). The README markers
-        // it needs are checked above.
-        println!("VALIDATION_WRITE_DOC is set: the tables are compared on the next plain run");
+        // assembles them afterwards. The markers it needs are checked above.
+        println!("VALIDATION_WRITE_DOC is set: the table is compared on the next plain run");
         return;
     }
-    let doc = between_markers("docs/validation.md");
     let hint =
         "run `VALIDATION_WRITE_DOC=1 cargo test --release` then `python3 post/validation_table.py`";
-    for (file, got, want) in [
-        ("README.md", readme, want.clone()),
-        // docs/validation.md sits in docs/: its links are relative to it.
-        ("docs/validation.md", doc, want.replace("](docs/", "](")),
-    ] {
-        if got != want {
-            let first = got
-                .lines()
-                .zip(want.lines())
-                .position(|(a, b)| a != b)
-                .unwrap_or(got.lines().count().min(want.lines().count()));
-            panic!(
-                "{file}: the validation table differs from docs/validation/*.md at table line {} ({} lines against {}):\n  {}\nagainst the rows'\n  {}\n{hint}",
-                first + 1,
-                got.lines().count(),
-                want.lines().count(),
-                got.lines().nth(first).unwrap_or("(none)"),
-                want.lines().nth(first).unwrap_or("(none)")
-            );
-        }
+    // docs/validation.md sits in docs/: its links are relative to it.
+    let want = want.replace("](docs/", "](");
+    if doc != want {
+        let first = doc
+            .lines()
+            .zip(want.lines())
+            .position(|(a, b)| a != b)
+            .unwrap_or(doc.lines().count().min(want.lines().count()));
+        panic!(
+            "docs/validation.md: the validation table differs from docs/validation/*.md at table line {} ({} lines against {}):\n  {}\nagainst the rows'\n  {}\n{hint}",
+            first + 1,
+            doc.lines().count(),
+            want.lines().count(),
+            doc.lines().nth(first).unwrap_or("(none)"),
+            want.lines().nth(first).unwrap_or("(none)")
+        );
     }
 }

@@ -2,11 +2,14 @@
 //!
 //! Scalars are printed as pretty JSON, curves as CSV with a header row (the CSV writers are in
 //! `cli_curves.rs`). Geometry defaults to VM272 (two cylinders of 8 mm, E = 200 N/mm², ν = 0.3,
-//! P = 10 N/mm); every subcommand that needs it accepts `--r1 --r2 --e1 --nu1 --e2 --nu2 --load`.
-//! See `docs/analytic.md`.
+//! P = 10 N/mm); every subcommand that needs it accepts `--r1 --r2 --e1 --nu1 --e2 --nu2 --load`,
+//! and `--case CASE` takes the radii, moduli, load and friction law from a case file
+//! ([`super::case_scene`]), each flag given as well overriding the case's value. See
+//! `docs/analytic.md`.
 
 use super::AnalyticError;
 use super::apparent::apparent;
+use super::case_scene::{CaseScene, SceneError};
 use super::cattaneo::CattaneoMindlin;
 use super::cli_curves;
 use super::dcm::{DoubleCm, Weakening};
@@ -17,6 +20,7 @@ use crate::friction::{FrictionError, FrictionLaw, PRESETS, Shape};
 use clap::{Args, Subcommand, ValueEnum};
 use serde_json::{Value, json};
 use std::io::Write;
+use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 /// Arguments of `stickslip analytic`.
@@ -68,6 +72,8 @@ pub enum CliError {
     Analytic(#[from] AnalyticError),
     #[error(transparent)]
     Friction(#[from] FrictionError),
+    #[error(transparent)]
+    Scene(#[from] SceneError),
     #[error("{0}")]
     Usage(String),
     #[error("cannot write output: {0}")]
@@ -79,38 +85,163 @@ pub enum CliError {
 /// Result of a subcommand runner.
 pub(super) type CliResult<T> = std::result::Result<T, CliError>;
 
-/// Geometry and normal load (VM272 defaults).
+/// Geometry and normal load: VM272's, or a case's with `--case`; a flag given overrides either.
 #[derive(Args, Debug, Clone)]
 pub struct GeomArgs {
-    /// Radius of body 1 (mm).
-    #[arg(long, default_value_t = 8.0)]
+    /// Take the radii, moduli, normal load and friction law from a case file: body 1 holds
+    /// `contact.slave`, body 2 `contact.master`; each radius is fitted to its face's nodes at
+    /// the first touch; the load is the first `pilot_y` force of the stages.
+    #[arg(long, value_name = "CASE")]
+    pub case: Option<PathBuf>,
+    /// Radius of body 1 (mm; `inf` for a flat) [default: 8, or the case's]
+    #[arg(long)]
+    pub r1: Option<f64>,
+    /// Radius of body 2 (mm; `inf` for a flat) [default: 8, or the case's]
+    #[arg(long)]
+    pub r2: Option<f64>,
+    /// Young's modulus of body 1 (N/mm²) [default: 200, or the case's]
+    #[arg(long)]
+    pub e1: Option<f64>,
+    /// Poisson's ratio of body 1 [default: 0.3, or the case's]
+    #[arg(long)]
+    pub nu1: Option<f64>,
+    /// Young's modulus of body 2 (N/mm²) [default: 200, or the case's]
+    #[arg(long)]
+    pub e2: Option<f64>,
+    /// Poisson's ratio of body 2 [default: 0.3, or the case's]
+    #[arg(long)]
+    pub nu2: Option<f64>,
+    /// Normal load P per unit thickness (N/mm) [default: 10, or the case's]
+    #[arg(long)]
+    pub load: Option<f64>,
+}
+
+/// The geometry and load a subcommand works on: the flags, else the case's (`--case`), else
+/// VM272's.
+#[derive(Debug, Clone)]
+pub(super) struct Scene {
     pub r1: f64,
-    /// Radius of body 2 (mm; `inf` for a flat).
-    #[arg(long, default_value_t = 8.0)]
     pub r2: f64,
-    /// Young's modulus of body 1 (N/mm²).
-    #[arg(long, default_value_t = 200.0)]
     pub e1: f64,
-    /// Poisson's ratio of body 1.
-    #[arg(long, default_value_t = 0.3)]
     pub nu1: f64,
-    /// Young's modulus of body 2 (N/mm²).
-    #[arg(long, default_value_t = 200.0)]
     pub e2: f64,
-    /// Poisson's ratio of body 2.
-    #[arg(long, default_value_t = 0.3)]
     pub nu2: f64,
-    /// Normal load P per unit thickness (N/mm).
-    #[arg(long, default_value_t = 10.0)]
     pub load: f64,
+    /// The case's scene, when `--case` was given.
+    pub case: Option<CaseScene>,
 }
 
 impl GeomArgs {
+    /// The scene: each value from its flag, else from the case, else VM272's.
+    pub(super) fn scene(&self) -> CliResult<Scene> {
+        let case = self.case.as_deref().map(CaseScene::load).transpose()?;
+        let c = case.as_ref();
+        let load = match (self.load, c) {
+            (Some(p), _) => p,
+            (None, Some(c)) => c.load.ok_or_else(|| {
+                CliError::Usage(format!(
+                    "--case {}: no stage gives `pilot_y` as a force, so the normal load is not \
+                     known: give --load",
+                    c.path.display()
+                ))
+            })?,
+            (None, None) => 10.0,
+        };
+        Ok(Scene {
+            r1: self.r1.or(c.map(|c| c.body1.r)).unwrap_or(8.0),
+            r2: self.r2.or(c.map(|c| c.body2.r)).unwrap_or(8.0),
+            e1: self.e1.or(c.map(|c| c.body1.e)).unwrap_or(200.0),
+            nu1: self.nu1.or(c.map(|c| c.body1.nu)).unwrap_or(0.3),
+            e2: self.e2.or(c.map(|c| c.body2.e)).unwrap_or(200.0),
+            nu2: self.nu2.or(c.map(|c| c.body2.nu)).unwrap_or(0.3),
+            load,
+            case,
+        })
+    }
+}
+
+impl Scene {
     /// The Hertz solution of this geometry and load.
     pub(super) fn hertz(&self) -> CliResult<Hertz> {
         let g = Geometry::from_bodies(self.r1, self.r2, self.e1, self.nu1, self.e2, self.nu2)?;
         Ok(Hertz::new(g, self.load)?)
     }
+
+    /// The case's friction law, if `--case` gave one.
+    pub(super) fn law(&self) -> Option<&FrictionLaw> {
+        self.case.as_ref().and_then(|c| c.law.as_ref())
+    }
+
+    /// f_s and f_d: the flags, else the case's law.
+    pub(super) fn coefficients(&self, fs: Option<f64>, fd: Option<f64>) -> CliResult<(f64, f64)> {
+        let law = self.law();
+        let fs = fs.or(law.map(FrictionLaw::f_static));
+        let fd = match fd {
+            Some(fd) => Some(fd),
+            None => law.map(FrictionLaw::f_dynamic).transpose()?,
+        };
+        match (fs, fd) {
+            (Some(fs), Some(fd)) => Ok((fs, fd)),
+            _ => Err(CliError::Usage(
+                "--fs and --fd are required (or --case with a case that has a friction law)".into(),
+            )),
+        }
+    }
+
+    /// The slip length: `--delta`, else Δ from `--lambda`, else the case law's Δ.
+    pub(super) fn delta(
+        &self,
+        delta: Option<f64>,
+        lambda: Option<f64>,
+        h: &Hertz,
+        fs: f64,
+        fd: f64,
+    ) -> CliResult<f64> {
+        match (delta, lambda, self.law()) {
+            (Some(d), _, _) => {
+                if !d.is_finite() || d < 0.0 {
+                    return Err(AnalyticError::NegativeDelta { delta: d }.into());
+                }
+                Ok(d)
+            }
+            (_, Some(l), _) => Ok(scales::delta_from_lambda(l, h.geom.r, fs, fd, h.a)?),
+            (None, None, Some(law)) => Ok(law.delta()?),
+            (None, None, None) => Err(CliError::Usage(
+                "--delta or --lambda is required (or --case with a case that has a friction law)"
+                    .into(),
+            )),
+        }
+    }
+
+    /// `v` with the case's scene under `"scene"`, when `--case` was given.
+    pub(super) fn annotate(&self, mut v: Value) -> Value {
+        if let Some(c) = &self.case {
+            v["scene"] = c.to_json();
+        }
+        v
+    }
+}
+
+/// The dimensionless numbers of a case's scene (its Hertz a under its load, its law): Λ, χ, Ψ
+/// and f_s/f_d, for the subcommands that take those rather than a geometry.
+pub(super) fn case_scales(path: &Path) -> CliResult<(Scales, f64, f64, Value)> {
+    let g = GeomArgs {
+        case: Some(path.to_path_buf()),
+        r1: None,
+        r2: None,
+        e1: None,
+        nu1: None,
+        e2: None,
+        nu2: None,
+        load: None,
+    };
+    let scene = g.scene()?;
+    let h = scene.hertz()?;
+    let (fs, fd) = scene.coefficients(None, None)?;
+    let delta = scene.delta(None, None, &h, fs, fd)?;
+    let sc = Scales::new(&h, fs, fd, delta)?;
+    let v = scene.annotate(json!({}))["scene"].clone();
+    Ok((sc, fs, fd, v))
 }
 
 /// Tangential force: absolute or as a ratio.
@@ -136,9 +267,9 @@ impl ForceArgs {
     }
 }
 
-/// Fracture energy W, slip length Δ or Λ (exactly one).
+/// Fracture energy W, slip length Δ or Λ (at most one; with `--case` and none, the case law's Δ).
 #[derive(Args, Debug, Clone)]
-#[group(required = true, multiple = false)]
+#[group(required = false, multiple = false)]
 pub struct WeakArgs {
     /// Slip length Δ (mm), eq. (Maugis10); W = (f_s − f_d) p(c) Δ.
     #[arg(long)]
@@ -151,9 +282,9 @@ pub struct WeakArgs {
     pub w: Option<f64>,
 }
 
-/// Slip length Δ or Λ (exactly one).
+/// Slip length Δ or Λ (at most one; with `--case` and neither, the case law's Δ).
 #[derive(Args, Debug, Clone)]
-#[group(required = true, multiple = false)]
+#[group(required = false, multiple = false)]
 pub struct LengthArgs {
     /// Slip length Δ (mm), eq. (Maugis10).
     #[arg(long)]
@@ -163,27 +294,11 @@ pub struct LengthArgs {
     pub lambda: Option<f64>,
 }
 
-impl LengthArgs {
-    /// Δ itself (checked non-negative), or Δ from Λ, eq. (Lambda).
-    pub(super) fn delta(&self, h: &Hertz, fs: f64, fd: f64) -> CliResult<f64> {
-        match (self.delta, self.lambda) {
-            (Some(d), _) => {
-                if !d.is_finite() || d < 0.0 {
-                    return Err(AnalyticError::NegativeDelta { delta: d }.into());
-                }
-                Ok(d)
-            }
-            (_, Some(l)) => Ok(scales::delta_from_lambda(l, h.geom.r, fs, fd, h.a)?),
-            _ => unreachable!("clap group is required"),
-        }
-    }
-}
-
 #[derive(Args, Debug, Clone)]
 pub struct CmArgs {
-    /// Friction coefficient f.
+    /// Friction coefficient f [default with --case: the case's constant μ].
     #[arg(long)]
-    pub mu: f64,
+    pub mu: Option<f64>,
     #[command(flatten)]
     pub force: ForceArgs,
     #[command(flatten)]
@@ -192,12 +307,12 @@ pub struct CmArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct AbruptArgs {
-    /// Static coefficient f_s.
+    /// Static coefficient f_s [default with --case: the case law's].
     #[arg(long)]
-    pub fs: f64,
-    /// Dynamic coefficient f_d.
+    pub fs: Option<f64>,
+    /// Dynamic coefficient f_d [default with --case: the case law's].
     #[arg(long)]
-    pub fd: f64,
+    pub fd: Option<f64>,
     #[command(flatten)]
     pub force: ForceArgs,
     #[command(flatten)]
@@ -206,12 +321,12 @@ pub struct AbruptArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct DcmArgs {
-    /// Static coefficient f_s.
+    /// Static coefficient f_s [default with --case: the case law's].
     #[arg(long)]
-    pub fs: f64,
-    /// Dynamic coefficient f_d.
+    pub fs: Option<f64>,
+    /// Dynamic coefficient f_d [default with --case: the case law's].
     #[arg(long)]
-    pub fd: f64,
+    pub fd: Option<f64>,
     #[command(flatten)]
     pub weak: WeakArgs,
     #[command(flatten)]
@@ -220,9 +335,9 @@ pub struct DcmArgs {
     pub geom: GeomArgs,
 }
 
-/// Friction ratio for dimensionless curves.
+/// Friction ratio for dimensionless curves (one of them, or `--case`).
 #[derive(Args, Debug, Clone)]
-#[group(required = true, multiple = false)]
+#[group(required = false, multiple = false)]
 pub struct RatioArgs {
     /// Ψ = (f_s/f_d − 1)² Λ; then f_s/f_d = 1 + sqrt(Ψ/Λ).
     #[arg(long)]
@@ -232,13 +347,44 @@ pub struct RatioArgs {
     pub fs_over_fd: Option<f64>,
 }
 
+/// `--case` for the subcommands that take dimensionless numbers (Λ, χ, Ψ, f_s/f_d): computed
+/// from the case's scene (radii, moduli, load, law); a number given as well overrides.
+#[derive(Args, Debug, Clone)]
+pub struct CaseArg {
+    /// Take Λ, χ, Ψ and f_s/f_d from a case file (its geometry, load and friction law).
+    #[arg(long, value_name = "CASE")]
+    pub case: Option<PathBuf>,
+}
+
+impl CaseArg {
+    /// The case's scales, f_s, f_d and scene, when `--case` was given.
+    pub(super) fn scales(&self) -> CliResult<Option<(Scales, f64, f64, Value)>> {
+        self.case.as_deref().map(case_scales).transpose()
+    }
+}
+
+/// `value`, else `from_case`, else a usage error naming `flag`.
+pub(super) fn given_or_case(
+    value: Option<f64>,
+    from_case: Option<f64>,
+    flag: &str,
+) -> CliResult<f64> {
+    value.or(from_case).ok_or_else(|| {
+        CliError::Usage(format!(
+            "{flag} is required (or --case with a slip-weakening law)"
+        ))
+    })
+}
+
 #[derive(Args, Debug, Clone)]
 pub struct DcmCurveArgs {
     /// Λ = RΔ/((f_s − f_d) a²).
     #[arg(long)]
-    pub lambda: f64,
+    pub lambda: Option<f64>,
     #[command(flatten)]
     pub ratio: RatioArgs,
+    #[command(flatten)]
+    pub case: CaseArg,
     /// Number of points (c/a uniform in [0, 1]).
     #[arg(long, default_value_t = 201)]
     pub n: usize,
@@ -246,12 +392,12 @@ pub struct DcmCurveArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct TractionArgs {
-    /// Static coefficient f_s.
+    /// Static coefficient f_s [default with --case: the case law's].
     #[arg(long)]
-    pub fs: f64,
-    /// Dynamic coefficient f_d.
+    pub fs: Option<f64>,
+    /// Dynamic coefficient f_d [default with --case: the case law's].
     #[arg(long)]
-    pub fd: f64,
+    pub fd: Option<f64>,
     #[command(flatten)]
     pub len: LengthArgs,
     #[command(flatten)]
@@ -265,22 +411,27 @@ pub struct TractionArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct JkrArgs {
-    /// Ψ = (f_s/f_d − 1) RΔ/(f_d a²).
+    /// Ψ = (f_s/f_d − 1) RΔ/(f_d a²) [default with --case: the case's].
     #[arg(long)]
-    pub psi: f64,
+    pub psi: Option<f64>,
     /// Also give the stable c/a at this Q/(f_d P).
     #[arg(long)]
     pub q_ratio: Option<f64>,
-    /// Also check the small-scale criterion at the maximum for this Λ.
+    /// Also check the small-scale criterion at the maximum for this Λ [default with --case: the
+    /// case's].
     #[arg(long)]
     pub lambda: Option<f64>,
+    #[command(flatten)]
+    pub case: CaseArg,
 }
 
 #[derive(Args, Debug, Clone)]
 pub struct JkrCurveArgs {
-    /// Ψ.
+    /// Ψ [default with --case: the case's].
     #[arg(long)]
-    pub psi: f64,
+    pub psi: Option<f64>,
+    #[command(flatten)]
+    pub case: CaseArg,
     /// Number of points (c/a uniform in [0, 1]).
     #[arg(long, default_value_t = 201)]
     pub n: usize,
@@ -288,12 +439,12 @@ pub struct JkrCurveArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct ScalesArgs {
-    /// Static coefficient f_s.
+    /// Static coefficient f_s [default with --case: the case law's].
     #[arg(long)]
-    pub fs: f64,
-    /// Dynamic coefficient f_d.
+    pub fs: Option<f64>,
+    /// Dynamic coefficient f_d [default with --case: the case law's].
     #[arg(long)]
-    pub fd: f64,
+    pub fd: Option<f64>,
     #[command(flatten)]
     pub len: LengthArgs,
     /// Also evaluate s0/c, W, K_II and the JKR zone width δ at this stick radius c/a.
@@ -312,12 +463,15 @@ pub enum ShapeArg {
     Exponential,
 }
 
-/// A friction law: `--json`, `--preset` or `--shape` with coefficients.
+/// A friction law: `--json`, `--preset`, `--shape` with coefficients, or `--case`.
 #[derive(Args, Debug, Clone)]
 pub struct LawSpec {
     /// The law as JSON, e.g. '{"shape":"ramp","fs":0.15,"fd":0.1,"delta":2.9e-4}'.
-    #[arg(long, conflicts_with_all = ["preset", "shape"])]
+    #[arg(long, conflicts_with_all = ["preset", "shape", "case"])]
     pub json: Option<String>,
+    /// The law of a case file's `contact.friction` (Δ from Λ with the pair's E*).
+    #[arg(long, value_name = "CASE", conflicts_with_all = ["preset", "shape"])]
+    pub case: Option<PathBuf>,
     /// A Table 1 preset (see `presets`); a ramp unless --shape is given.
     #[arg(long)]
     pub preset: Option<String>,
@@ -338,6 +492,15 @@ pub struct LawSpec {
 impl LawSpec {
     /// The friction law from `--json`, `--preset` or `--shape` with its coefficients.
     pub(super) fn law(&self) -> CliResult<FrictionLaw> {
+        if let Some(path) = &self.case {
+            let scene = CaseScene::load(path)?;
+            return scene.law.ok_or_else(|| {
+                CliError::Usage(format!(
+                    "--case {}: the case is frictionless (no `contact.friction`)",
+                    path.display()
+                ))
+            });
+        }
         if let Some(j) = &self.json {
             return serde_json::from_str(j)
                 .map_err(|e| CliError::Usage(format!("invalid friction law JSON: {e}")));
@@ -360,7 +523,8 @@ impl LawSpec {
         };
         match self.shape {
             None => Err(CliError::Usage(
-                "give the law with --json, --preset or --shape (+ --fs --fd --delta)".into(),
+                "give the law with --json, --preset, --shape (+ --fs --fd --delta) or --case"
+                    .into(),
             )),
             Some(ShapeArg::Constant) => Ok(FrictionLaw::constant(need(self.fs, "fs")?)?),
             Some(s) => {
@@ -428,12 +592,14 @@ pub struct ImpliedLawArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct ApparentArgs {
-    /// χ = RΔ/(f_d a²), eq. (chi).
+    /// χ = RΔ/(f_d a²), eq. (chi) [default with --case: the case's].
     #[arg(long)]
-    pub chi: f64,
-    /// f_s/f_d.
+    pub chi: Option<f64>,
+    /// f_s/f_d [default with --case: the case law's].
     #[arg(long)]
-    pub fs_over_fd: f64,
+    pub fs_over_fd: Option<f64>,
+    #[command(flatten)]
+    pub case: CaseArg,
     /// Skip the double C–M value.
     #[arg(long)]
     pub no_dcm: bool,
@@ -441,9 +607,11 @@ pub struct ApparentArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct ApparentCurveArgs {
-    /// χ = RΔ/(f_d a²), eq. (chi).
+    /// χ = RΔ/(f_d a²), eq. (chi) [default with --case: the case's].
     #[arg(long)]
-    pub chi: f64,
+    pub chi: Option<f64>,
+    #[command(flatten)]
+    pub case: CaseArg,
     /// Largest f_s/f_d.
     #[arg(long, default_value_t = 3.0)]
     pub ratio_max: f64,
@@ -490,60 +658,87 @@ pub fn run(args: &AnalyticArgs, out: &mut dyn Write) -> Result<(), CliError> {
 
 /// `hertz`: R, E*, a, p0 and Dundurs' β as JSON.
 fn run_hertz(g: &GeomArgs, out: &mut dyn Write) -> CliResult<()> {
-    let h = g.hertz()?;
+    let sc = g.scene()?;
+    let h = sc.hertz()?;
     print_json(
         out,
-        &json!({
+        &sc.annotate(json!({
             "r_eff": h.geom.r, "e_star": h.geom.e_star, "load": h.p_load,
             "a": h.a, "p0": h.p0,
-            "dundurs_beta": dundurs_beta(g.e1, g.nu1, g.e2, g.nu2),
-        }),
+            "dundurs_beta": dundurs_beta(sc.e1, sc.nu1, sc.e2, sc.nu2),
+        })),
     )
 }
 
 /// `cm`: the Cattaneo–Mindlin stick semi-width for constant f as JSON.
 fn run_cm(c: &CmArgs, out: &mut dyn Write) -> CliResult<()> {
-    let h = c.geom.hertz()?;
-    let cm = CattaneoMindlin::new(h, c.mu)?;
-    let q = c.force.force(c.mu, h.p_load);
+    let sc = c.geom.scene()?;
+    let h = sc.hertz()?;
+    let mu = match (c.mu, sc.law()) {
+        (Some(mu), _) => mu,
+        (None, Some(law)) => match law.f_dynamic() {
+            Ok(fd) if fd == law.f_static() => fd,
+            _ => {
+                return Err(CliError::Usage(format!(
+                    "the case's friction law is not constant (f_s = {}): --mu is required",
+                    law.f_static()
+                )));
+            }
+        },
+        (None, None) => {
+            return Err(CliError::Usage(
+                "--mu is required (or --case with a case that has a friction law)".into(),
+            ));
+        }
+    };
+    let cm = CattaneoMindlin::new(h, mu)?;
+    let q = c.force.force(mu, h.p_load);
     let cc = cm.stick_half_width(q)?;
     print_json(
         out,
-        &json!({
-            "mu": c.mu, "q": q, "q_over_mu_p": q / (c.mu * h.p_load),
+        &sc.annotate(json!({
+            "mu": mu, "q": q, "q_over_mu_p": q / (mu * h.p_load),
             "a": h.a, "p0": h.p0, "c": cc, "c_over_a": cc / h.a,
-        }),
+        })),
     )
 }
 
 /// `abrupt`: the abrupt static→dynamic transition (C–M with f = f_d) as JSON.
 fn run_abrupt(c: &AbruptArgs, out: &mut dyn Write) -> CliResult<()> {
-    let h = c.geom.hertz()?;
-    let cm = CattaneoMindlin::abrupt(h, c.fs, c.fd)?;
-    let q = c.force.force(c.fd, h.p_load);
+    let sc = c.geom.scene()?;
+    let h = sc.hertz()?;
+    let (fs, fd) = sc.coefficients(c.fs, c.fd)?;
+    let cm = CattaneoMindlin::abrupt(h, fs, fd)?;
+    let q = c.force.force(fd, h.p_load);
     let cc = cm.stick_half_width(q)?;
     print_json(
         out,
-        &json!({
-            "fs": c.fs, "fd": c.fd, "q": q, "q_over_fd_p": q / (c.fd * h.p_load),
+        &sc.annotate(json!({
+            "fs": fs, "fd": fd, "q": q, "q_over_fd_p": q / (fd * h.p_load),
             "a": h.a, "c": cc, "c_over_a": cc / h.a,
             "note": "abrupt transition (Delta = 0): Cattaneo-Mindlin with f = f_d",
-        }),
+        })),
     )
 }
 
 /// `jkr`: the JKR maximum, optionally the stable c/a at a force and the small-scale check, as JSON.
 fn run_jkr(j: &JkrArgs, out: &mut dyn Write) -> CliResult<()> {
-    let cur = JkrCurve::new(j.psi)?;
+    let case = j.case.scales()?;
+    let psi = given_or_case(j.psi, case.as_ref().map(|c| c.0.psi), "--psi")?;
+    let lambda = j.lambda.or(case.as_ref().map(|c| c.0.lambda));
+    let cur = JkrCurve::new(psi)?;
     let m = cur.maximum();
     let mut v = json!({
-        "psi": j.psi, "q_max_ratio": m.q_ratio, "c_max_over_a": m.c_over_a,
+        "psi": psi, "q_max_ratio": m.q_ratio, "c_max_over_a": m.c_over_a,
     });
+    if let Some((_, _, _, scene)) = &case {
+        v["scene"] = scene.clone();
+    }
     if let Some(q) = j.q_ratio {
         v["q_ratio"] = json!(q);
         v["c_over_a"] = json!(cur.stick_half_width(q)?);
     }
-    if let Some(l) = j.lambda {
+    if let Some(l) = lambda {
         super::non_negative("Lambda", l)?;
         let s = (m.c_over_a > 0.0).then(|| s0_over_c(l, m.c_over_a));
         v["lambda"] = json!(l);
@@ -555,10 +750,12 @@ fn run_jkr(j: &JkrArgs, out: &mut dyn Write) -> CliResult<()> {
 
 /// `scales`: the length scales as JSON, plus the values at a stick radius if `--c-over-a` is given.
 fn run_scales(s: &ScalesArgs, out: &mut dyn Write) -> CliResult<()> {
-    let h = s.geom.hertz()?;
-    let delta = s.len.delta(&h, s.fs, s.fd)?;
-    let sc = Scales::new(&h, s.fs, s.fd, delta)?;
-    let mut v = serde_json::to_value(sc)?;
+    let scene = s.geom.scene()?;
+    let h = scene.hertz()?;
+    let (fs, fd) = scene.coefficients(s.fs, s.fd)?;
+    let delta = scene.delta(s.len.delta, s.len.lambda, &h, fs, fd)?;
+    let sc = Scales::new(&h, fs, fd, delta)?;
+    let mut v = scene.annotate(serde_json::to_value(sc)?);
     v["a"] = json!(h.a);
     v["p0"] = json!(h.p0);
     v["small_scale_limit"] = json!(scales::SMALL_SCALE_LIMIT);
@@ -573,9 +770,9 @@ fn run_scales(s: &ScalesArgs, out: &mut dyn Write) -> CliResult<()> {
             .into());
         }
         let c = ct * h.a;
-        let jkr = Jkr::new(h, s.fs, s.fd, delta)?;
+        let jkr = Jkr::new(h, fs, fd, delta)?;
         let pc = h.pressure(c);
-        let s0c = scales::s0(h.geom.e_star, delta, s.fs, s.fd, pc)?;
+        let s0c = scales::s0(h.geom.e_star, delta, fs, fd, pc)?;
         v["c_over_a"] = json!(ct);
         v["p_c"] = json!(pc);
         v["s0_c"] = json!(s0c);
@@ -648,47 +845,63 @@ fn run_presets(out: &mut dyn Write) -> CliResult<()> {
 
 /// `apparent`: the apparent static friction for given χ and f_s/f_d as JSON.
 fn run_apparent(a: &ApparentArgs, out: &mut dyn Write) -> CliResult<()> {
-    let p = apparent(a.chi, a.fs_over_fd, !a.no_dcm)?;
-    print_json(out, &serde_json::to_value(p)?)
+    let case = a.case.scales()?;
+    let chi = given_or_case(a.chi, case.as_ref().map(|c| c.0.chi), "--chi")?;
+    let ratio = given_or_case(
+        a.fs_over_fd,
+        case.as_ref().map(|c| c.1 / c.2),
+        "--fs-over-fd",
+    )?;
+    let p = apparent(chi, ratio, !a.no_dcm)?;
+    let mut v = serde_json::to_value(p)?;
+    if let Some((_, _, _, scene)) = case {
+        v["scene"] = scene;
+    }
+    print_json(out, &v)
 }
 
 /// `dcm`: the double Cattaneo–Mindlin state (c, b, W) with the JKR and C–M comparisons as JSON.
 fn run_dcm(d: &DcmArgs, out: &mut dyn Write) -> CliResult<()> {
-    let h = d.geom.hertz()?;
-    let m = DoubleCm::new(h, d.fs, d.fd)?;
-    let q = d.force.force(d.fd, h.p_load);
-    let weak = match (d.weak.delta, d.weak.lambda, d.weak.w) {
-        (Some(x), _, _) => Weakening::SlipLength(x),
-        (_, Some(l), _) => {
-            Weakening::SlipLength(scales::delta_from_lambda(l, h.geom.r, d.fs, d.fd, h.a)?)
+    let sc = d.geom.scene()?;
+    let h = sc.hertz()?;
+    let (fs, fd) = sc.coefficients(d.fs, d.fd)?;
+    let m = DoubleCm::new(h, fs, fd)?;
+    let q = d.force.force(fd, h.p_load);
+    let weak = match (d.weak.w, d.weak.delta, d.weak.lambda, sc.law()) {
+        (Some(w), _, _, _) => Weakening::Energy(w),
+        (None, None, None, None) => {
+            return Err(CliError::Usage(
+                "--delta, --lambda or --w is required (or --case with a case that has a \
+                 friction law)"
+                    .into(),
+            ));
         }
-        (_, _, Some(w)) => Weakening::Energy(w),
-        _ => unreachable!("clap group is required"),
+        _ => Weakening::SlipLength(sc.delta(d.weak.delta, d.weak.lambda, &h, fs, fd)?),
     };
     let st = m.solve(q, weak)?;
-    let mut v = json!({
-        "fs": d.fs, "fd": d.fd, "load": h.p_load, "a": h.a,
-        "q": q, "q_over_fd_p": q / (d.fd * h.p_load),
+    let mut v = sc.annotate(json!({
+        "fs": fs, "fd": fd, "load": h.p_load, "a": h.a,
+        "q": q, "q_over_fd_p": q / (fd * h.p_load),
         "c": st.c, "b": st.b, "c_over_a": st.c / h.a, "b_over_a": st.b / h.a,
         "w": st.w, "p_c": st.p_c,
-    });
+    }));
     if let Weakening::SlipLength(delta) = weak {
         v["delta"] = json!(delta);
-        if d.fs > d.fd {
-            v["lambda"] = json!(scales::lambda(h.geom.r, delta, d.fs, d.fd, h.a)?);
-            let jkr = JkrCurve::new(Jkr::new(h, d.fs, d.fd, delta)?.psi())?;
+        if fs > fd {
+            v["lambda"] = json!(scales::lambda(h.geom.r, delta, fs, fd, h.a)?);
+            let jkr = JkrCurve::new(Jkr::new(h, fs, fd, delta)?.psi())?;
             v["psi"] = json!(jkr.psi);
-            v["jkr_c_over_a"] = json!(jkr.stick_half_width(q / (d.fd * h.p_load)).ok());
+            v["jkr_c_over_a"] = json!(jkr.stick_half_width(q / (fd * h.p_load)).ok());
         }
     }
     v["cm_fd_c_over_a"] = json!(
-        CattaneoMindlin::new(h, d.fd)?
+        CattaneoMindlin::new(h, fd)?
             .stick_half_width(q)
             .ok()
             .map(|c| c / h.a)
     );
     v["cm_fs_c_over_a"] = json!(
-        CattaneoMindlin::new(h, d.fs)?
+        CattaneoMindlin::new(h, fs)?
             .stick_half_width(q)
             .ok()
             .map(|c| c / h.a)

@@ -6,7 +6,7 @@ use super::apparent;
 use super::cattaneo::CattaneoMindlin;
 use super::cli::{
     ApparentCurveArgs, CliResult, DcmCurveArgs, ImpliedLawArgs, JkrCurveArgs, LawCurveArgs,
-    TractionArgs, csv_opt,
+    TractionArgs, csv_opt, given_or_case,
 };
 use super::dcm::{DoubleCm, implied_law_normalized};
 use super::jkr::{Jkr, JkrCurve};
@@ -15,22 +15,28 @@ use std::io::Write;
 
 /// `dcm-curve`: Q/(f_d P) vs c/a of the double C–M solution at fixed Λ (Fig. 5).
 pub(super) fn dcm_curve(d: &DcmCurveArgs, out: &mut dyn Write) -> CliResult<()> {
+    let case = d.case.scales()?;
+    let lambda = given_or_case(d.lambda, case.as_ref().map(|c| c.0.lambda), "--lambda")?;
     let r = match (d.ratio.psi, d.ratio.fs_over_fd) {
         (Some(psi), _) => {
             JkrCurve::new(psi)?;
-            if d.lambda <= 0.0 {
+            if lambda <= 0.0 {
                 return Err(AnalyticError::NotPositive {
                     name: "Lambda",
-                    value: d.lambda,
+                    value: lambda,
                 }
                 .into());
             }
-            1.0 + (psi / d.lambda).sqrt()
+            1.0 + (psi / lambda).sqrt()
         }
         (_, Some(r)) => r,
-        _ => unreachable!(),
+        (None, None) => given_or_case(
+            None,
+            case.as_ref().map(|c| c.1 / c.2),
+            "--psi or --fs-over-fd",
+        )?,
     };
-    let (m, weak) = DoubleCm::normalized(r, d.lambda)?;
+    let (m, weak) = DoubleCm::normalized(r, lambda)?;
     let pts = m.curve(weak, d.n)?;
     writeln!(out, "c_over_a,b_over_a,mid_over_a,q_ratio,branch,stable")?;
     for p in pts {
@@ -54,17 +60,19 @@ pub(super) fn dcm_curve(d: &DcmCurveArgs, out: &mut dyn Write) -> CliResult<()> 
 /// `traction`: p(x) and the shear tractions q(x) of double C–M, C–M with f_d and the JKR limit
 /// across the contact (Figs. 2–3).
 pub(super) fn traction(t: &TractionArgs, out: &mut dyn Write) -> CliResult<()> {
-    let h = t.geom.hertz()?;
-    let delta = t.len.delta(&h, t.fs, t.fd)?;
-    let dcm = DoubleCm::new(h, t.fs, t.fd)?;
-    let q = t.force.force(t.fd, h.p_load);
+    let sc = t.geom.scene()?;
+    let h = sc.hertz()?;
+    let (fs, fd) = sc.coefficients(t.fs, t.fd)?;
+    let delta = sc.delta(t.len.delta, t.len.lambda, &h, fs, fd)?;
+    let dcm = DoubleCm::new(h, fs, fd)?;
+    let q = t.force.force(fd, h.p_load);
     let st = dcm.solve_delta(q, delta)?;
-    let cm = CattaneoMindlin::new(h, t.fd)?;
+    let cm = CattaneoMindlin::new(h, fd)?;
     let c_cm = cm.stick_half_width(q).ok();
-    let jkr = Jkr::new(h, t.fs, t.fd, delta)?;
+    let jkr = Jkr::new(h, fs, fd, delta)?;
     let c_jkr = jkr
         .curve()
-        .stick_half_width(q / (t.fd * h.p_load))
+        .stick_half_width(q / (fd * h.p_load))
         .ok()
         .map(|x| x * h.a);
     writeln!(out, "x,x_over_a,p,q_dcm,q_cm_fd,q_jkr,f_dcm")?;
@@ -92,7 +100,8 @@ pub(super) fn traction(t: &TractionArgs, out: &mut dyn Write) -> CliResult<()> {
 
 /// `jkr-curve`: Q/(f_d P) vs c/a of the JKR limit for given Ψ (Fig. 4).
 pub(super) fn jkr_curve(j: &JkrCurveArgs, out: &mut dyn Write) -> CliResult<()> {
-    let cur = JkrCurve::new(j.psi)?;
+    let case = j.case.scales()?;
+    let cur = JkrCurve::new(given_or_case(j.psi, case.map(|c| c.0.psi), "--psi")?)?;
     writeln!(out, "c_over_a,q_ratio,stable")?;
     for (c, q, s) in cur.curve(j.n) {
         writeln!(out, "{c},{q},{s}")?;
@@ -141,7 +150,9 @@ pub(super) fn implied_law(i: &ImpliedLawArgs, out: &mut dyn Write) -> CliResult<
 /// `apparent-curve`: Q_max/(f_d P) vs f_s/f_d for given χ, optionally with the double C–M
 /// columns (Fig. 6).
 pub(super) fn apparent_curve(a: &ApparentCurveArgs, out: &mut dyn Write) -> CliResult<()> {
-    let pts = apparent::apparent_curve(a.chi, a.ratio_max, a.n, a.dcm)?;
+    let case = a.case.scales()?;
+    let chi = given_or_case(a.chi, case.map(|c| c.0.chi), "--chi")?;
+    let pts = apparent::apparent_curve(chi, a.ratio_max, a.n, a.dcm)?;
     writeln!(
         out,
         "fs_over_fd,q_max_jkr,c_max_jkr,s0_over_c,small_scale_ok,q_max_dcm,c_max_dcm,b_max_dcm"

@@ -32,14 +32,19 @@ impl Geometry {
         })
     }
 
-    /// From two convex cylinders (radii `r1`, `r2`; `r2 = f64::INFINITY` is a flat) and their
-    /// Young's moduli and Poisson's ratios (plane strain).
+    /// From two convex cylinders (radii `r1`, `r2`; either may be `f64::INFINITY`, a flat, but
+    /// not both) and their Young's moduli and Poisson's ratios (plane strain).
     pub fn from_bodies(r1: f64, r2: f64, e1: f64, nu1: f64, e2: f64, nu2: f64) -> Result<Self> {
-        positive("R1", r1)?;
-        if r2.is_nan() || r2 <= 0.0 {
-            return Err(AnalyticError::NotPositive {
-                name: "R2",
-                value: r2,
+        // Either body may be a flat (R = ∞), not both.
+        for (name, r) in [("R1", r1), ("R2", r2)] {
+            if r.is_nan() || r <= 0.0 {
+                return Err(AnalyticError::NotPositive { name, value: r });
+            }
+        }
+        if r1.is_infinite() && r2.is_infinite() {
+            return Err(AnalyticError::NotFinite {
+                name: "R1",
+                value: r1,
             });
         }
         positive("E1", e1)?;

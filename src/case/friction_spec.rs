@@ -14,7 +14,8 @@ use serde::{Deserialize, Serialize};
 ///   radius R and `load` the normal load P that set `a = sqrt(4PR/(πE*))` (E* of the pair);
 ///
 /// each with an optional `"history": "accumulated" | "since_stick"` (see
-/// [`crate::friction::History`]).
+/// [`crate::friction::History`]). `f_s` and `f_d`, the spelling sweep grids once used, are read
+/// as `fs` and `fd` ([`OLD_SPELLINGS`]; [`crate::case::deprecated_keys`] names them for a note).
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct FrictionSpec {
     #[serde(flatten)]
@@ -42,10 +43,25 @@ pub enum FrictionKind {
     },
 }
 
+/// Old spellings of friction keys, read as the new ones: (old, new).
+pub const OLD_SPELLINGS: [(&str, &str); 2] = [("f_s", "fs"), ("f_d", "fd")];
+
 impl<'de> Deserialize<'de> for FrictionSpec {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         use serde::de::Error;
         let mut v = serde_json::Value::deserialize(d)?;
+        if let Some(o) = v.as_object_mut() {
+            for (old, new) in OLD_SPELLINGS {
+                if let Some(x) = o.remove(old) {
+                    if o.contains_key(new) {
+                        return Err(D::Error::custom(format!(
+                            "friction: give `{new}` or its old spelling `{old}`, not both"
+                        )));
+                    }
+                    o.insert(new.to_string(), x);
+                }
+            }
+        }
         let history = match v.as_object_mut().and_then(|o| o.remove("history")) {
             None => crate::friction::History::Accumulated,
             Some(h) => serde_json::from_value(h.clone()).map_err(|_| {

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 mod friction_spec;
 mod stages;
 
-pub use friction_spec::{FrictionKind, FrictionSpec};
+pub use friction_spec::{FrictionKind, FrictionSpec, OLD_SPELLINGS};
 use stages::StageItem;
 pub(crate) use stages::deserialize_stages;
 use std::path::{Path, PathBuf};
@@ -274,7 +274,62 @@ pub enum CaseError {
     },
 }
 
+/// Physical groups with the case keys that name them: (`contact.slave`, `lower_arc`), ….
+pub type NamedGroups<'a> = Vec<(String, &'a str)>;
+
+/// The note for a key written in its old spelling: `key` (with its path) is read as `new`.
+pub fn old_spelling_note(key: &str, new: &str) -> String {
+    format!(
+        "`{key}` is the old spelling of `{new}`; it is read as `{new}` (rename it: the old \
+         spelling may be refused in a later version)"
+    )
+}
+
+/// Notes on the old spellings a case file `v` uses (`contact.friction.f_s`, …); empty when it
+/// uses none.
+pub fn deprecated_keys(v: &serde_json::Value) -> Vec<String> {
+    let law = &v["contact"]["friction"];
+    OLD_SPELLINGS
+        .iter()
+        .filter(|(old, _)| law.get(old).is_some())
+        .map(|(old, new)| old_spelling_note(&format!("contact.friction.{old}"), new))
+        .collect()
+}
+
 impl Case {
+    /// The physical groups the case names, with the key that names each: the surfaces
+    /// (`bodies[i].group`) and the curves (`supports[i].group`, `tractions[i].group`,
+    /// `pilot.group`, `contact.slave`, `contact.master`, in that order), for messages that say
+    /// which key names a group the mesh cannot give.
+    pub fn named_groups(&self) -> (NamedGroups<'_>, NamedGroups<'_>) {
+        let surfaces = self
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(i, b)| (format!("bodies[{i}].group"), b.group.as_str()))
+            .collect();
+        let mut curves: Vec<(String, &str)> = self
+            .supports
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (format!("supports[{i}].group"), s.group.as_str()))
+            .collect();
+        curves.extend(
+            self.tractions
+                .iter()
+                .enumerate()
+                .map(|(i, t)| (format!("tractions[{i}].group"), t.group.as_str())),
+        );
+        if let Some(p) = &self.pilot {
+            curves.push(("pilot.group".into(), p.group.as_str()));
+        }
+        if let Some(c) = &self.contact {
+            curves.push(("contact.slave".into(), c.slave.as_str()));
+            curves.push(("contact.master".into(), c.master.as_str()));
+        }
+        (surfaces, curves)
+    }
+
     /// Reads, parses and validates a case file.
     pub fn load(path: &Path) -> Result<Case, CaseError> {
         let p = path.display().to_string();

@@ -8,17 +8,30 @@ use crate::shapes::tri6;
 /// A mesh that cannot be used, with what is wrong and where.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum MeshCheckError {
-    #[error("{path}: physical group `{name}` is not in the mesh (its groups: {available})")]
+    #[error(
+        "{path}: {}physical group `{name}` is not in the mesh (its groups: {available})",
+        named_by(key)
+    )]
     MissingGroup {
         path: String,
+        /// The case key that names the group (`contact.slave`), or empty.
+        key: String,
         name: String,
         available: String,
     },
-    #[error("{path}: physical group `{name}` is empty")]
-    EmptyGroup { path: String, name: String },
-    #[error("{path}: physical group `{name}` is a {found}, but a {expected} is needed here")]
+    #[error("{path}: {}physical group `{name}` is empty", named_by(key))]
+    EmptyGroup {
+        path: String,
+        key: String,
+        name: String,
+    },
+    #[error(
+        "{path}: {}physical group `{name}` is a {found}, but a {expected} is needed here",
+        named_by(key)
+    )]
     WrongDim {
         path: String,
+        key: String,
         name: String,
         found: &'static str,
         expected: &'static str,
@@ -75,12 +88,33 @@ fn path(mesh: &Mesh) -> String {
     mesh.source.display().to_string()
 }
 
+/// `` `key`: `` before a group's message, when the key that names the group is known.
+fn named_by(key: &str) -> String {
+    if key.is_empty() {
+        String::new()
+    } else {
+        format!("`{key}`: ")
+    }
+}
+
 /// Checks that a group exists, is not empty and has the expected dimension.
 pub fn require_group(mesh: &Mesh, name: &str, dim: GroupDim) -> Result<(), MeshCheckError> {
+    require_named_group(mesh, "", name, dim)
+}
+
+/// [`require_group`] for a group that the case key `key` (`contact.slave`, `bodies[0].group`)
+/// names; the errors name the key.
+pub fn require_named_group(
+    mesh: &Mesh,
+    key: &str,
+    name: &str,
+    dim: GroupDim,
+) -> Result<(), MeshCheckError> {
     let g = mesh
         .group(name)
         .ok_or_else(|| MeshCheckError::MissingGroup {
             path: path(mesh),
+            key: key.into(),
             name: name.into(),
             available: mesh
                 .groups
@@ -96,6 +130,7 @@ pub fn require_group(mesh: &Mesh, name: &str, dim: GroupDim) -> Result<(), MeshC
     if g.dim != dim {
         return Err(MeshCheckError::WrongDim {
             path: path(mesh),
+            key: key.into(),
             name: name.into(),
             found: label(g.dim),
             expected: label(dim),
@@ -104,6 +139,7 @@ pub fn require_group(mesh: &Mesh, name: &str, dim: GroupDim) -> Result<(), MeshC
     if g.elements.is_empty() {
         return Err(MeshCheckError::EmptyGroup {
             path: path(mesh),
+            key: key.into(),
             name: name.into(),
         });
     }
@@ -123,12 +159,29 @@ pub fn check(
     bodies: &[&str],
     boundaries: &[&str],
 ) -> Result<CheckReport, MeshCheckError> {
-    for b in bodies {
-        require_group(mesh, b, GroupDim::Surface)?;
+    let keyless = |v: &[&str]| -> Vec<(String, String)> {
+        v.iter().map(|g| (String::new(), g.to_string())).collect()
+    };
+    check_named(mesh, &keyless(bodies), &keyless(boundaries))
+}
+
+/// [`check`] with the case key that names each group (`(key, group)`, as
+/// [`crate::case::Case::named_groups`] gives them): a missing, empty or wrong-dimension group's
+/// error names the key (`` `contact.slave`: physical group `body` is a surface, … ``).
+pub fn check_named<K: AsRef<str>, G: AsRef<str>>(
+    mesh: &Mesh,
+    bodies: &[(K, G)],
+    boundaries: &[(K, G)],
+) -> Result<CheckReport, MeshCheckError> {
+    for (k, b) in bodies {
+        require_named_group(mesh, k.as_ref(), b.as_ref(), GroupDim::Surface)?;
     }
-    for b in boundaries {
-        require_group(mesh, b, GroupDim::Curve)?;
+    for (k, b) in boundaries {
+        require_named_group(mesh, k.as_ref(), b.as_ref(), GroupDim::Curve)?;
     }
+    let bodies: Vec<&str> = bodies.iter().map(|(_, b)| b.as_ref()).collect();
+    let boundaries: Vec<&str> = boundaries.iter().map(|(_, b)| b.as_ref()).collect();
+    let (bodies, boundaries) = (&bodies[..], &boundaries[..]);
     for (i, x) in mesh.nodes.iter().enumerate() {
         if !x[0].is_finite() || !x[1].is_finite() {
             return Err(MeshCheckError::NonFiniteNode {
@@ -242,4 +295,47 @@ fn shared_nodes(mesh: &Mesh, a: &str, b: &str) -> Vec<usize> {
     na.into_iter()
         .filter(|n| nb.binary_search(n).is_ok())
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::Group;
+
+    #[test]
+    fn a_group_error_names_the_key_that_names_the_group() {
+        let group = |name: &str, dim| Group {
+            name: name.into(),
+            dim,
+            tag: 1,
+            elements: vec![0],
+        };
+        let mesh = Mesh {
+            source: "m.msh".into(),
+            groups: vec![
+                group("body", GroupDim::Surface),
+                group("face", GroupDim::Curve),
+            ],
+            ..Default::default()
+        };
+        let e = require_named_group(&mesh, "contact.slave", "body", GroupDim::Curve).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "m.msh: `contact.slave`: physical group `body` is a surface, but a curve is needed \
+             here"
+        );
+        let e = require_named_group(&mesh, "bodies[1].group", "ghost", GroupDim::Surface)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`bodies[1].group`: physical group `ghost` is not"),
+            "{e}"
+        );
+        // Without a key, the message is as before.
+        let e = require_group(&mesh, "body", GroupDim::Curve).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("m.msh: physical group `body` is a surface")
+        );
+    }
 }

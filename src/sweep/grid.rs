@@ -30,14 +30,25 @@ pub struct SweepFile {
 #[serde(transparent)]
 pub struct StageList(#[serde(deserialize_with = "crate::case::deserialize_stages")] pub Vec<Stage>);
 
-/// A grid of laws (shape × f_s × f_d × Δ or Λ) and loads (the last stage's `pilot_x`).
+/// A grid of laws (shape × f_s × f_d × Δ or Λ) and loads (the last stage's `pilot_x`). The keys
+/// are spelled as in a case's `contact.friction` (`fs`, `fd`); `f_s` and `f_d`, the old spelling,
+/// are read as those ([`deprecated_keys`] names them for a note), and messages name the key as
+/// it was written.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Grid {
     /// Shapes of the slip-weakening law (ramp, step, exponential); default `["ramp"]`.
     pub shape: Option<Vec<String>>,
-    pub f_s: Option<Vec<f64>>,
-    pub f_d: Option<Vec<f64>>,
+    /// Static coefficients f_s.
+    pub fs: Option<Vec<f64>>,
+    /// Dynamic coefficients f_d.
+    pub fd: Option<Vec<f64>>,
+    /// `fs` in its old spelling.
+    #[serde(rename = "f_s")]
+    pub fs_old: Option<Vec<f64>>,
+    /// `fd` in its old spelling.
+    #[serde(rename = "f_d")]
+    pub fd_old: Option<Vec<f64>>,
     /// Slip lengths Δ, or the dimensionless Λ = R Δ / ((f_s − f_d) a²) with the Hertz
     /// semi-width `a` of `radius` and `load` (one of the two lists).
     pub delta: Option<Vec<f64>>,
@@ -78,8 +89,10 @@ pub fn expand(case: &Case, file: &SweepFile, path: &Path) -> Result<Rows, SweepE
     let grid = file.grid.as_ref();
     let grid_laws = grid.is_some_and(|g| {
         g.shape.is_some()
-            || g.f_s.is_some()
-            || g.f_d.is_some()
+            || g.fs.is_some()
+            || g.fd.is_some()
+            || g.fs_old.is_some()
+            || g.fd_old.is_some()
             || g.delta.is_some()
             || g.lambda.is_some()
             || g.history.is_some()
@@ -172,7 +185,23 @@ fn grid_laws_of(
     if shapes.is_empty() {
         return Err(bad("grid.shape", "is empty: the grid has no point".into()));
     }
-    let (f_s, f_d) = (list("f_s", &g.f_s)?, list("f_d", &g.f_d)?);
+    // Each coefficient in the spelling it was given (the old one read as the new).
+    let spelled = |new: &'static str,
+                   v: &Option<Vec<f64>>,
+                   old: &'static str,
+                   v_old: &Option<Vec<f64>>|
+     -> Result<Vec<f64>, SweepError> {
+        match (v, v_old) {
+            (Some(_), Some(_)) => Err(bad(
+                &format!("grid.{old}"),
+                format!("give `{new}` or its old spelling `{old}`, not both"),
+            )),
+            (None, Some(_)) => list(old, v_old),
+            _ => list(new, v),
+        }
+    };
+    let f_s = spelled("fs", &g.fs, "f_s", &g.fs_old)?;
+    let f_d = spelled("fd", &g.fd, "f_d", &g.fd_old)?;
     let (key, xs) = match (&g.delta, &g.lambda) {
         (Some(_), Some(_)) => {
             return Err(bad(
@@ -222,6 +251,26 @@ fn grid_laws_of(
         }
     }
     Ok(laws)
+}
+
+/// Notes on the old spellings a sweep file `v` uses (`grid.f_s`, `friction[0].f_d`, …), each
+/// naming the key and its spelling now; empty when it uses none.
+pub fn deprecated_keys(v: &serde_json::Value) -> Vec<String> {
+    let mut notes = Vec::new();
+    let mut look = |at: String, o: &serde_json::Value| {
+        for (old, new) in crate::case::OLD_SPELLINGS {
+            if o.get(old).is_some() {
+                notes.push(crate::case::old_spelling_note(&format!("{at}{old}"), new));
+            }
+        }
+    };
+    look("grid.".into(), &v["grid"]);
+    if let Some(laws) = v["friction"].as_array() {
+        for (i, law) in laws.iter().enumerate() {
+            look(format!("friction[{i}]."), law);
+        }
+    }
+    notes
 }
 
 /// A law as compact JSON, for messages.

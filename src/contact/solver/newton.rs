@@ -610,9 +610,9 @@ fn predicted_start(mu: &[f64], prev: &State, ns: usize, t: Option<f64>) -> Vec<f
 /// force-controlled peak: on L3 and L4 the bracketing of Q_max ended up to 0.3 % early with
 /// them (`tests/sweep.rs`, `tests/onset.rs`). At L5 and L7 they moved Q_max by at most 2.5e-4
 /// of it (Fig. 2's case loaded past its peak, ramp laws f_s = 0.15 and 0.2, Λ = 0.025), and
-/// by 8e-12 to 3.5e-5 in five such runs on L5 (twenty-fourth session: the bracket of a peak
-/// also moves with the load steps a run takes near it). Until the twenty-fourth session they
-/// started at 1 536 (L6); at L5 they take 40 % off the 50-law sweep's rows (docs/benchmarks.md).
+/// by 8e-12 to 3.5e-5 in five such runs on L5 (`tests/shortcuts.rs`; the bracket of a peak
+/// also moves with the load steps a run takes near it). At L5 they take 40 % off the 50-law
+/// sweep's rows (`STICKSLIP_CONTACT_SHORTCUTS=off` against on, docs/benchmarks.md).
 pub(super) const SHORTCUTS_FROM: usize = 768;
 
 /// Whether the structured solve may take its shortcuts at all: `STICKSLIP_CONTACT_SHORTCUTS=off`
