@@ -120,3 +120,17 @@ fn contact_tables_follow_their_own_switch() {
     let n = names(&r.out);
     assert!(!n.iter().any(|f| f.starts_with("contact_")), "{n:?}");
 }
+
+/// A surface given where a curve is needed names the case key that gave it.
+#[test]
+fn a_surface_for_a_curve_names_the_key() {
+    let mut v = shipped_case_on("hertz.json", "vm272_L0.msh");
+    v["contact"]["slave"] = json!("lower_body");
+    let r = run_case("surface-for-curve", &v, &[]);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(
+        r.stderr.contains("`contact.slave`: physical group `lower_body` is a surface"),
+        "{}",
+        r.stderr
+    );
+}

@@ -241,9 +241,10 @@ impl Model {
         // count (`tests/determinism.rs`).
         faer::set_global_parallelism(faer::Par::Seq);
         let path = mesh.source.display().to_string();
-        let bodies: Vec<&str> = case.bodies.iter().map(|b| b.group.as_str()).collect();
+        // Each group with the case key that names it, for the messages.
+        let (named_bodies, named_curves) = case.named_groups();
+        check::check_named(&mesh, &named_bodies, &named_curves)?;
         let curves = boundary_groups(case);
-        check::check(&mesh, &bodies, &curves)?;
         crate::trace::mark("mesh checked");
 
         let (elems, elem_body) = body_elements(case, &mesh);
