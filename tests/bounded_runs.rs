@@ -129,7 +129,8 @@ fn a_surface_for_a_curve_names_the_key() {
     let r = run_case("surface-for-curve", &v, &[]);
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(
-        r.stderr.contains("`contact.slave`: physical group `lower_body` is a surface"),
+        r.stderr
+            .contains("`contact.slave`: physical group `lower_body` is a surface"),
         "{}",
         r.stderr
     );

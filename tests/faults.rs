@@ -6,7 +6,8 @@
 //!   renamed into place;
 //! * the last written step's state, from which `--resume` finishes the run with the answers
 //!   of the uninterrupted run (`history.csv` apart from wall times);
-//! and the full disk a clear message naming the file (exit 4).
+//! and the full disk a clear message naming the file (exit 4). A run killed while it writes its
+//! model-cache entry leaves a cache the next run uses or rebuilds, with the same answers.
 //!
 //! Case: VM272 C–M on L3, 20 tangential steps, every step written (3.9 MB a step).
 
@@ -194,4 +195,95 @@ fn a_full_disk_stops_the_run_with_whole_files_and_a_resumable_state() {
     );
     assert_eq!(code, 0, "{err}");
     assert_eq!(answers(&moved), answers(&whole));
+}
+
+/// A run killed while it writes its model-cache entry (a temporary entry file in the cache
+/// directory at the moment of the kill): the next run with that cache completes with the
+/// answers of a run without a cache (the partial entry is never used).
+#[test]
+fn a_run_killed_while_it_writes_the_cache_leaves_a_usable_cache() {
+    let dir = tempdir("faults-cache");
+    let case = case(&dir);
+    let plain = dir.join("plain");
+    let (code, err) = run(&case, &plain, &["--quiet"]);
+    assert_eq!(code, 0, "{err}");
+    let cache = dir.join("cache");
+    let temporaries = |d: &Path| -> usize {
+        std::fs::read_dir(d).map_or(0, |r| {
+            r.filter(|e| {
+                let n = e
+                    .as_ref()
+                    .unwrap()
+                    .file_name()
+                    .to_string_lossy()
+                    .to_string();
+                n.contains(".tmp")
+            })
+            .count()
+        })
+    };
+    // Poll the cache directory and kill the run while a temporary entry is there.
+    let mut caught = false;
+    for attempt in 0..5 {
+        let _ = std::fs::remove_dir_all(&cache);
+        let out = dir.join(format!("killed-{attempt}"));
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+            .env_remove("STICKSLIP_NO_CACHE")
+            .args([
+                "run",
+                case.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "--quiet",
+            ])
+            .args(["--cache", cache.to_str().unwrap()])
+            .spawn()
+            .unwrap();
+        let t0 = std::time::Instant::now();
+        let mut seen = false;
+        while t0.elapsed().as_secs() < 60 {
+            if temporaries(&cache) > 0 {
+                seen = true;
+                break;
+            }
+            if child.try_wait().unwrap().is_some() {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_micros(100));
+        }
+        let _ = child.kill();
+        child.wait().unwrap();
+        if !seen {
+            continue;
+        }
+        caught = true;
+        let again = dir.join(format!("again-{attempt}"));
+        let mut args = vec![
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            again.to_str().unwrap(),
+        ];
+        args.extend(["--quiet", "--cache", cache.to_str().unwrap()]);
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+            .env_remove("STICKSLIP_NO_CACHE")
+            .args(&args)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "the run after the kill: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert_eq!(
+            answers(&again),
+            answers(&plain),
+            "after a kill during the cache write"
+        );
+        break;
+    }
+    assert!(
+        caught,
+        "no run was caught writing its cache entry in 5 tries"
+    );
 }

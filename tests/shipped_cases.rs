@@ -7,7 +7,7 @@
 //! | `hertz` | Hertz's semi-width of VM272, a = 0.6808 mm (`shared/reference/vm272.md`) |
 //! | `vm272_cm` | Cattaneo–Mindlin stick semi-width c = a sqrt(1 − Q/μP) with Hertz's a |
 //! | `fretting` | the same at the first load reversal, Q = 1.5 N/mm |
-//! | `fig2`, `fig3_ramp`, `fig3_step` | the double Cattaneo–Mindlin c/a and b/a at the last load (eqs. Qx, W1) |
+//! | `fig2`, `fig3_ramp`, `fig3_step` | the double Cattaneo–Mindlin c/a and b/a at the last load (eqs. Qx, W1; an approximation at Fig. 3's Λ = 0.277) |
 //! | `fig2_softening` | the peak of the slip-controlled curve against the double C–M Q_max/P |
 //! | `pair_*` (Table 1) | equilibrium lost just below f_s (Λ ≫ 1: the double C–M Q_max/P is f_s) |
 //! | `pair_jkr_copper_mild_steel` | Q_max/(f_d P) against the JKR limit (eq. QJKR) |
@@ -119,30 +119,33 @@ fn stage_end(t: &Table, stage: usize) -> &Vec<f64> {
 fn check_case(name: &str, d: &Done) {
     let h = || Table::read(&d.out.join("history.csv"));
     let s = || summary(&d.out);
-    let dcm_fig = |q_over_fdp: f64, tol: f64| {
+    let dcm_fig = |q_over_fdp: f64, tol_c: f64, tol_b: Option<f64>| {
         assert_eq!(d.code, 0, "{name}: {}", d.stderr);
         let f = s()["friction"].clone();
         let (fs, fd) = (num(&f, "f_s"), num(&f, "f_d"));
         let lambda = num(&f, "lambda");
         let (m, weak) = DoubleCm::normalized(fs / fd, lambda).unwrap();
-        let st = m.solve(q_over_fdp, weak).unwrap();
+        // The normalised problem has a = R = E* = 1 and f_d = 1: Q = (Q/(f_d P)) P.
+        let st = m.solve(q_over_fdp * m.hertz.p_load, weak).unwrap();
         let t = h();
         let last = t.rows.last().unwrap();
         let (a, c, b) = (last[t.col("a")], last[t.col("c")], last[t.col("b")]);
-        assert!(rel(name, "c/a", c / a, st.c) < tol, "{name}: c/a");
-        assert!(rel(name, "b/a", b / a, st.b) < tol, "{name}: b/a");
+        assert!(rel(name, "c/a", c / a, st.c) < tol_c, "{name}: c/a");
+        if let Some(tol_b) = tol_b {
+            assert!(rel(name, "b/a", b / a, st.b) < tol_b, "{name}: b/a");
+        }
     };
     match name {
         "hertz" => {
             assert_eq!(d.code, 0, "{name}: {}", d.stderr);
             let a = h().last("a");
-            // Measured −0.13 % on L4 (the contact edge falls between nodes).
+            // Measured −0.30 % on L4 (the contact edge falls between nodes).
             assert!(rel(name, "a", a, 0.6808) < 0.005);
         }
         "vm272_cm" => {
             assert_eq!(d.code, 0, "{name}: {}", d.stderr);
             let want = 0.6808 * (1.0f64 - 0.936 / (0.2 * 10.0)).sqrt();
-            // Measured +0.3 % on L4.
+            // Measured −0.30 % on L4.
             assert!(rel(name, "c", h().last("c"), want) < 0.01);
         }
         "fretting" => {
@@ -150,10 +153,16 @@ fn check_case(name: &str, d: &Done) {
             let t = h();
             let c = stage_end(&t, 1)[t.col("c")];
             let want = 0.6808 * (1.0f64 - 1.5 / (0.2 * 10.0)).sqrt();
+            // Measured −1.4 % on L4.
             assert!(rel(name, "c at Q = 1.5", c, want) < 0.02);
         }
-        "fig2" => dcm_fig(0.8, 0.01),
-        "fig3_ramp" | "fig3_step" => dcm_fig(0.9, 0.02),
+        // Measured on L5: c/a −0.52 %, b/a +1.23 % (b falls on a node).
+        "fig2" => dcm_fig(0.8, 0.01, Some(0.015)),
+        // Λ = 0.277: the double C–M closed form is an approximation there (README, Known
+        // limits); measured c/a −4.2 % (ramp) and −2.6 % (step), b/a +3.0 % (ramp). The step
+        // law's b (where the slip reaches Δ) is not the closed form's.
+        "fig3_ramp" => dcm_fig(0.9, 0.05, Some(0.04)),
+        "fig3_step" => dcm_fig(0.9, 0.05, None),
         "fig2_softening" => {
             assert_eq!(d.code, 0, "{name}: {}", d.stderr);
             let f = s()["friction"].clone();
@@ -161,7 +170,8 @@ fn check_case(name: &str, d: &Done) {
                 num(&f, "apparent_friction"),
                 num(&f, "apparent_friction_dcm"),
             );
-            assert!(rel(name, "Q_max/P", fe, dcm) < 0.01);
+            // Measured −0.04 % on L4.
+            assert!(rel(name, "Q_max/P", fe, dcm) < 0.005);
         }
         "pair_jkr_copper_mild_steel" => {
             assert_eq!(d.code, 5, "{name}: {}", d.stderr);
@@ -177,6 +187,7 @@ fn check_case(name: &str, d: &Done) {
             let (fs, apparent) = (num(&f, "f_s"), num(&f, "apparent_friction"));
             assert_eq!(num(&f, "apparent_friction_dcm"), fs, "{name}");
             assert!(apparent < fs, "{name}: Q_max/P = {apparent} ≥ f_s");
+            // Measured −0.001 % to −0.26 %.
             assert!(rel(name, "Q_max/P", apparent, fs) < 0.005);
         }
         "arc_hertz" => {
@@ -206,7 +217,8 @@ fn check_case(name: &str, d: &Done) {
             let row = stage_end(&t, 0);
             let p = -row[t.col("pilot_fy")];
             let want = hertz_a(p, 5.0, 12.0, num(body, "E"), num(body, "nu"));
-            assert!(rel(name, "a", row[t.col("a")], want) < 0.02);
+            // Measured +0.03 %.
+            assert!(rel(name, "a", row[t.col("a")], want) < 0.002);
         }
         other => panic!(
             "cases/{other}.json has no row in tests/shipped_cases.rs: every shipped case is run \

@@ -18,8 +18,8 @@ use unheld::{unheld_after, unheld_before};
 
 /// Halvings of a stage's nominal increment before a step is given up: no increment is smaller
 /// than the nominal one over `2^MAX_CUTBACKS`, so a lost equilibrium is bracketed to within
-/// `2^(1 − MAX_CUTBACKS)` of a nominal step (3e-5 of it; see [`Driver::run_stage`]).
-pub const MAX_CUTBACKS: usize = 16;
+/// `2^(1 − MAX_CUTBACKS)` of a nominal step (5e-4 of it; see [`Driver::run_stage`]).
+pub const MAX_CUTBACKS: usize = 12;
 
 /// A stage accepts at most `STEP_BUDGET` times its nominal steps, and at least
 /// `STEP_BUDGET_MIN` steps (room for the bracketing of a peak in a stage of one step), after
@@ -382,8 +382,10 @@ impl Driver<'_> {
     /// next nominal fraction `k / steps` when that is nearer, so the nominal loads are reached
     /// exactly whatever the cutbacks on the way. A failed attempt halves `Δα`; a converged
     /// step doubles it, up to the nominal `1/steps`. Invariants that bound the loop:
-    /// * `Δα` is never below `Δα_min = (1/steps) / 2^MAX_CUTBACKS`: a failure that would need
-    ///   a smaller increment ends the stage (a lost equilibrium under force control, bracketed
+    /// * `Δα` is never below `Δα_min = (1/steps) / 2^MAX_CUTBACKS`. The first time in a
+    ///   nominal step that a failure would need a smaller increment, the step probes the
+    ///   nominal load at least half a nominal step further and cuts back from there; the
+    ///   second time ends the stage (a lost equilibrium under force control, bracketed
     ///   between the last converged load and one at most `2 Δα_min` of the stage above it;
     ///   else a failed step);
     /// * every accepted step advances `α` by at least `Δα_min / 2`;
@@ -484,8 +486,8 @@ impl Driver<'_> {
                     // every node slips is singular along the pilot's force-controlled axis, and
                     // a smaller step starts from another guess. (A direction that nothing
                     // holds at all was refused before the first step: `free_direction`.)
-                    let bracketing = self.note_failed_load(ctl, target[0]);
                     attempts += 1;
+                    let bracketing = self.note_failed_load(ctl, target[0]);
                     cutbacks += 1;
                     dalpha = 0.5 * (a_new - alpha);
                     if dalpha >= d_min {
@@ -497,11 +499,12 @@ impl Driver<'_> {
                         continue;
                     }
                     // The increment reached its floor. Before the load is called the end of
-                    // the path, one probe past it: the nominal load at least half a nominal
-                    // step further. Newton can stall on a load where the active set chatters
-                    // while an equilibrium exists past it (a probe that converges goes on
-                    // from there, skipping at most one nominal load); past a lost
-                    // equilibrium the probe fails too.
+                    // the path, once per nominal step, a probe past it: the nominal load at
+                    // least half a nominal step further, and if that fails, the cutbacks
+                    // again from there, which try loads other than the first sequence did.
+                    // Newton can stall on a load where the active set chatters while an
+                    // equilibrium exists past it; past a lost equilibrium every attempt
+                    // fails and the floor is reached a second time.
                     if !probed {
                         probed = true;
                         let k = ((alpha + 0.5 * nominal) * stage.steps as f64).ceil() as usize;
@@ -527,13 +530,13 @@ impl Driver<'_> {
                 return Ok(self.stop(step, StepError::NotFinite, None));
             }
             alpha = a_new;
-            probed = false;
             // A nominal load reached: the aimed one, or one a probe reached.
             let landed = (alpha * stage.steps as f64).round() as usize;
             let landed = (landed as f64 / stage.steps as f64 == alpha).then_some(landed);
             if let Some(k) = landed {
                 k_next = k + 1;
                 attempts = 0;
+                probed = false;
             }
             self.control = ctl;
             self.scale = sc;
