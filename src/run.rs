@@ -128,8 +128,18 @@ pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
     })
 }
 
-/// Projected output above which a run warns before it starts (10 GiB).
+/// Projected output above which a run warns before it starts (10 GiB; `STICKSLIP_OUTPUT_WARN`
+/// sets another number of bytes).
 pub const OUTPUT_WARN_BYTES: u64 = 10 << 30;
+
+/// The projected output above which a run warns: [`OUTPUT_WARN_BYTES`] unless
+/// `STICKSLIP_OUTPUT_WARN` gives a number of bytes.
+fn output_warn_bytes() -> u64 {
+    std::env::var("STICKSLIP_OUTPUT_WARN")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(OUTPUT_WARN_BYTES)
+}
 
 /// Bytes of a written step's `.vtu` files per node of the model, raw binary (coordinates,
 /// displacement, stresses, von Mises, body and node ids: 120 B per node measured on
@@ -150,7 +160,8 @@ fn written_steps(case: &Case) -> u64 {
     if !case.output.vtu {
         return 0;
     }
-    (case.total_steps() / case.output.every + 1) as u64
+    // The multiples of `every` among the nominal steps, and the last one.
+    case.total_steps().div_ceil(case.output.every) as u64
 }
 
 /// The output a run of `case` on `model` is projected to write, restart states aside.
@@ -210,10 +221,10 @@ pub fn run_model(
         .unwrap_or("case".into());
     let level = opts.level();
     let projected = projected_output_bytes(case, &model);
-    if level >= LogLevel::Warn && projected > OUTPUT_WARN_BYTES {
+    if level >= LogLevel::Warn && projected > output_warn_bytes() {
         eprintln!(
-            "warning: this run will write about {} to {} ({} written steps of about {} each; \
-             `output.every` writes fewer, `\"vtu\": false` none)",
+            "warning: this run will write about {} ({projected} bytes) to {} ({} written steps \
+             of about {} each; `output.every` writes fewer, `\"vtu\": false` none)",
             crate::report::human_bytes(projected),
             out_dir.display(),
             written_steps(case),

@@ -135,3 +135,63 @@ fn a_surface_for_a_curve_names_the_key() {
         r.stderr
     );
 }
+
+/// A run projected to write more than the limit says so before its first step, with the
+/// estimate, which is within a fifth of what it then writes (`vm272_cm` on L3, every step).
+#[test]
+fn a_large_output_is_announced_with_a_fair_estimate() {
+    let mut v = shipped_case_on("vm272_cm.json", "vm272_L3.msh");
+    v["stages"][1]["steps"] = json!(10);
+    v["output"] = json!({"every": 1});
+    let dir = tempdir("output-warning");
+    let case = dir.join("case.json");
+    std::fs::write(&case, v.to_string()).unwrap();
+    let out = dir.join("out");
+    let (code, _, err) = stickslip_env(
+        &[
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &[("STICKSLIP_OUTPUT_WARN", "1000000")],
+    );
+    assert_eq!(code, 0, "{err}");
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("warning: this run will write about"))
+        .unwrap_or_else(|| panic!("no warning: {err}"));
+    assert!(
+        err.find(line).unwrap() < err.find("step 1 ").unwrap_or(usize::MAX),
+        "the warning comes after the first step: {err}"
+    );
+    let projected: f64 = line
+        .split(" bytes)")
+        .next()
+        .unwrap()
+        .rsplit('(')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let written = s["output_bytes"].as_f64().unwrap();
+    println!("projected {projected:e} bytes, written {written:e}");
+    assert!(
+        (projected / written - 1.0).abs() < 0.2,
+        "projected {projected} against {written} written"
+    );
+    // Below the limit: no warning.
+    let (code, _, err) = stickslip_env(
+        &[
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            dir.join("quiet").to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("will write about"), "{err}");
+}

@@ -6,7 +6,7 @@
 mod unheld;
 
 use crate::case::{Case, Control, Stage};
-use crate::contact::solver::{self, State, Status};
+use crate::contact::solver::{self, ContactError, State, Status};
 use crate::error::{RunError, StepError, StepFailure};
 use crate::friction::FrictionLaw;
 use crate::model::Model;
@@ -505,7 +505,10 @@ impl Driver<'_> {
                     // Newton can stall on a load where the active set chatters while an
                     // equilibrium exists past it; past a lost equilibrium every attempt
                     // fails and the floor is reached a second time.
-                    if !probed {
+                    // (Not for a singular system: no load past it cures that.)
+                    let stalled =
+                        matches!(e, StepError::Contact(ContactError::NoConvergence { .. }));
+                    if !probed && stalled {
                         probed = true;
                         let k = ((alpha + 0.5 * nominal) * stage.steps as f64).ceil() as usize;
                         let p = (k.min(stage.steps) as f64) / stage.steps as f64;
