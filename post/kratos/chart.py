@@ -7,9 +7,10 @@ and CalculiX (its rows of the documented 2026-11-26 accuracy-bench run, or a CSV
 
 Writes OUTDIR/speed_accuracy_3codes_pressure.png (max |p - p_H|/p0 over |x| <= 0.95a, Hertz and
 Cattaneo-Mindlin) and OUTDIR/speed_accuracy_3codes_shear.png (max |q - q_CM|/(mu p0), C-M).
-Only rows with status "ok" are drawn as points of a ladder; a Kratos row that did not converge
-(or converged to a wrong contact set) is drawn as a red cross with its level, so that it is
-seen and not mistaken for a result.
+Only rows with status "ok" are drawn as points of a ladder; a row that is not ok (a Kratos run
+with non-converged steps, or one that converged to a wrong contact set) is drawn as a hollow
+cross of its code's colour, labelled in the legend as not a valid result, so that it is seen
+and not mistaken for one.
 """
 import argparse
 import csv
@@ -52,13 +53,17 @@ def chart(rows, key, cases, target, target_label, ylabel, title, out, threads):
                if r.get("status", "ok") != "ok"]
         if ok:
             ax.plot([p[0] for p in ok], [p[1] for p in ok], **st)
+            dy = -11 if st.get("ls") == "--" else 4   # Hertz labels below, C-M above
             for x, y, L in ok:
-                ax.annotate(f"L{L}", (x, y), textcoords="offset points", xytext=(5, 4), fontsize=8,
+                ax.annotate(f"L{L}", (x, y), textcoords="offset points", xytext=(5, dy), fontsize=8,
                             color=st["color"])
+        if bad:
+            ax.plot([p[0] for p in bad], [p[1] for p in bad], marker="X", color=st["color"], ms=10,
+                    mew=1.5, mfc="none", ls=":", lw=0.8,
+                    label=st["label"] + ": steps not converged, not a valid result")
         for x, y, L in bad:
-            ax.plot([x], [y], marker="x", color="red", ms=9, mew=2, ls="none")
-            ax.annotate(f"L{L} not ok", (x, y), textcoords="offset points", xytext=(5, -10),
-                        fontsize=7.5, color="red")
+            ax.annotate(f"L{L}", (x, y), textcoords="offset points", xytext=(7, -11),
+                        fontsize=8, color=st["color"])
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.axhline(target, color="k", lw=0.8, ls="-.")
