@@ -153,6 +153,7 @@ def run_kratos(args, case, level, nsteps, tsteps):
     for k, v in json.loads(args.kratos_args).items():
         setattr(ka, k, v)
     rec = kv.run_level(ka, level)
+    rec["case"] = case   # the bench's case name (cm08 runs the driver's "cm" with another Q)
     rec["wall_s"] = rec.pop("wall_time_s")
     rec["newton_iterations"] = rec.get("iterations")
     x, p = kv.final_xp(os.path.join(REPO, rec["dir"], "contact.csv"))

@@ -30,6 +30,10 @@ STYLE = {
                               label="Kratos 10.4.4 ALM mortar (P1 triangles), Hertz"),
     ("kratos", "cm"): dict(color="tab:purple", marker="D", ls="-",
                            label="Kratos 10.4.4 ALM mortar (P1 triangles), Cattaneo–Mindlin"),
+    ("stickslip+", "hertz"): dict(color="tab:cyan", marker="o", ls="-.", mfc="white",
+                                  label="stickslip, Hertz, EXTRA"),
+    ("kratos+", "hertz"): dict(color="tab:pink", marker="D", ls="-.", mfc="white",
+                               label="Kratos, Hertz, EXTRA"),
     ("calculix", "cm"): dict(color="tab:red", marker="^", ls="-",
                              label="CalculiX 2.20 (CPE6, penalty), C–M, 2026-11-26 run"),
 }
@@ -69,7 +73,7 @@ def chart(rows, key, cases, target, target_label, ylabel, title, out, threads):
     ax.axhline(target, color="k", lw=0.8, ls="-.")
     ax.text(0.01, target, f" {target_label}", transform=ax.get_yaxis_transform(), va="bottom",
             fontsize=8)
-    ax.set_xlabel(f"wall time of the whole process (s), {threads} threads each, shared 2-core machine")
+    ax.set_xlabel(f"wall time of the whole process (s), {threads} threads each unless said, shared 2-core machine")
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=10)
     ax.grid(True, which="both", lw=0.3, alpha=0.5)
@@ -87,8 +91,18 @@ def main():
     ap.add_argument("--calculix", default=os.path.join(os.path.dirname(os.path.abspath(__file__)),
                                                        "calculix_2026-11-26.csv"))
     ap.add_argument("--threads", default="2")
+    ap.add_argument("--extra", help="a second bench CSV (e.g. a 1-thread run): its Hertz rows are "
+                                    "drawn as further series, labelled with --extra-label")
+    ap.add_argument("--extra-label", default="second run")
     args = ap.parse_args()
     rows = load(args.csv)
+    if args.extra:
+        for r in load(args.extra):
+            if r["case"] == "hertz":
+                r["code"] += "+"
+                rows.append(r)
+        for k in (("stickslip+", "hertz"), ("kratos+", "hertz")):
+            STYLE[k]["label"] = STYLE[k]["label"].replace("EXTRA", args.extra_label)
     if args.calculix and os.path.exists(args.calculix):
         rows += load(args.calculix)
     os.makedirs(args.outdir, exist_ok=True)

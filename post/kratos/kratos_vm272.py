@@ -572,7 +572,8 @@ def build_parser():
     ap.add_argument("--timeout", type=float, default=1800.0)
     ap.add_argument("--echo", type=int, default=0, help="solver echo level (timings of the builder)")
     ap.add_argument("--frictionless-normal-stage", action="store_true",
-                    help="friction coefficient 0 while P is applied, mu from the first tangential increment")
+                    help="friction coefficient 0 in the contact pair's properties while P is applied, mu "
+                         "from the first tangential increment (tried: no effect in Kratos 10.4.4)")
     ap.add_argument("--no-mixed-ulm", action="store_true", help="use_mixed_ulm_solver = false")
     ap.add_argument("--f-stick-disp-rtol", type=float)
     ap.add_argument("--f-stick-res-rtol", type=float)
