@@ -6,6 +6,7 @@
 //!   renamed into place;
 //! * the last written step's state, from which `--resume` finishes the run with the answers
 //!   of the uninterrupted run (`history.csv` apart from wall times);
+//!
 //! and the full disk a clear message naming the file (exit 4). A run killed while it writes its
 //! model-cache entry leaves a cache the next run uses or rebuilds, with the same answers.
 //!
@@ -178,7 +179,7 @@ fn a_full_disk_stops_the_run_with_whole_files_and_a_resumable_state() {
     );
     assert!(err.contains("No space left"), "{err}");
     let last = complete_files(&out);
-    assert!(last >= 1 && last < 21, "last whole state {last}");
+    assert!((1..21).contains(&last), "last whole state {last}");
     // Resumed on a disk with room, from the last state the full disk kept.
     let moved = dir.join("moved");
     std::fs::create_dir_all(&moved).unwrap();
