@@ -77,6 +77,16 @@ fn answers(out: &Path) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// A fresh directory `name` with the case and the uninterrupted run of it (`DIR/whole`).
+fn setup(name: &str) -> (std::path::PathBuf, std::path::PathBuf, std::path::PathBuf) {
+    let dir = tempdir(name);
+    let case = case(&dir);
+    let whole = dir.join("whole");
+    let (code, err) = run(&case, &whole, &["--quiet"]);
+    assert_eq!(code, 0, "{err}");
+    (dir, case, whole)
+}
+
 fn run(case: &Path, out: &Path, extra: &[&str]) -> (i32, String) {
     let mut args = vec![
         "run",
@@ -91,11 +101,7 @@ fn run(case: &Path, out: &Path, extra: &[&str]) -> (i32, String) {
 
 #[test]
 fn a_run_killed_while_it_writes_leaves_whole_files_and_resumes() {
-    let dir = tempdir("faults-kill");
-    let case = case(&dir);
-    let whole = dir.join("whole");
-    let (code, err) = run(&case, &whole, &["--quiet"]);
-    assert_eq!(code, 0, "{err}");
+    let (dir, case, whole) = setup("faults-kill");
     // Killed at several points of its writing: once the state of step k exists, at once.
     for k in [1usize, 6, 13] {
         let out = dir.join(format!("killed-{k}"));
@@ -162,11 +168,7 @@ impl Drop for Tmpfs {
 
 #[test]
 fn a_full_disk_stops_the_run_with_whole_files_and_a_resumable_state() {
-    let dir = tempdir("faults-full");
-    let case = case(&dir);
-    let whole = dir.join("whole");
-    let (code, err) = run(&case, &whole, &["--quiet"]);
-    assert_eq!(code, 0, "{err}");
+    let (dir, case, whole) = setup("faults-full");
     let disk = dir.join("disk");
     let fs = Tmpfs::mount(&disk, 40);
     let out = disk.join("out");
@@ -203,11 +205,7 @@ fn a_full_disk_stops_the_run_with_whole_files_and_a_resumable_state() {
 /// answers of a run without a cache (the partial entry is never used).
 #[test]
 fn a_run_killed_while_it_writes_the_cache_leaves_a_usable_cache() {
-    let dir = tempdir("faults-cache");
-    let case = case(&dir);
-    let plain = dir.join("plain");
-    let (code, err) = run(&case, &plain, &["--quiet"]);
-    assert_eq!(code, 0, "{err}");
+    let (dir, case, plain) = setup("faults-cache");
     let cache = dir.join("cache");
     let temporaries = |d: &Path| -> usize {
         std::fs::read_dir(d).map_or(0, |r| {
