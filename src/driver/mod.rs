@@ -103,7 +103,8 @@ pub struct Simulation {
 
 /// Steps through the stages of a case on a built model with friction law `law` (overriding
 /// the model's), calling `on_step` after every converged step. Steps that do not converge are
-/// cut back (halved) up to [`MAX_CUTBACKS`] times from the last converged state.
+/// cut back (halved) from the last converged state, down to the floor of [`MAX_CUTBACKS`]
+/// halvings of a nominal step (see [`Driver::run_stage`]).
 pub fn simulate(
     model: &Model,
     case: &Case,
