@@ -299,7 +299,7 @@ pub fn human_bytes(bytes: u64) -> String {
 /// Bytes of the files of a run of case `stem` in `dir` (see [`Summary::output_bytes`]).
 pub fn output_bytes(dir: &Path, stem: &str) -> u64 {
     let ours = |n: &str| {
-        n == crate::restart::JOURNAL
+        n == crate::output::JOURNAL
             || n.starts_with(&format!("{stem}_")) && n.ends_with(".vtu")
             || n == format!("{stem}.pvd")
             || n.starts_with("contact_") && n.ends_with(".csv")

@@ -22,8 +22,7 @@ use std::path::{Path, PathBuf};
 /// Version of the state file layout.
 pub const FORMAT: u32 = 3;
 
-/// The journal of step records a run writes beside its states.
-pub const JOURNAL: &str = "steps.jsonl";
+pub use crate::output::JOURNAL;
 
 /// What `state_NNNN.json` holds. The step records of its checkpoint, the energy rows and the
 /// `.pvd` entries are not in the file: [`load`] reads them from the journal and the `.pvd`.
@@ -65,13 +64,13 @@ pub fn pvd_entries(lines: &[JournalLine], stem: &str) -> Vec<PvdEntry> {
         entries.push(PvdEntry {
             time,
             part: 0,
-            file: crate::output::series::bodies_file_name(stem, step),
+            file: crate::output::bodies_file_name(stem, step),
         });
         if l.record.contact.is_some() {
             entries.push(PvdEntry {
                 time,
                 part: 1,
-                file: crate::output::series::contact_file_name(stem, step),
+                file: crate::output::contact_file_name(stem, step),
             });
         }
     }

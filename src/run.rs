@@ -253,8 +253,7 @@ pub fn run_model(
                     record: r.clone(),
                     energy: rows.as_ref().and_then(|rows| rows.get(i).cloned()),
                     written: s.pvd.iter().any(|e| {
-                        e.part == 0
-                            && e.file == crate::output::series::bodies_file_name(&stem, r.step)
+                        e.part == 0 && e.file == crate::output::bodies_file_name(&stem, r.step)
                     }),
                 })
                 .collect();

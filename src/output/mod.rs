@@ -469,6 +469,20 @@ pub struct PvdEntry {
     pub file: String,
 }
 
+/// The name of the bodies dataset of `step` (case `stem`).
+pub fn bodies_file_name(stem: &str, step: usize) -> String {
+    format!("{stem}_{step:04}.vtu")
+}
+
+/// The name of the contact-face dataset of `step` (case `stem`).
+pub fn contact_file_name(stem: &str, step: usize) -> String {
+    format!("{stem}_contact_{step:04}.vtu")
+}
+
+/// The journal of step records a run writes beside its restart states (see
+/// [`crate::restart`]).
+pub const JOURNAL: &str = "steps.jsonl";
+
 /// The text of a `.pvd` collection file.
 pub fn pvd(entries: &[PvdEntry]) -> String {
     let mut s = String::from(

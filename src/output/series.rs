@@ -20,7 +20,7 @@ use super::fields::{
     contact_csv, contact_vtu,
 };
 use super::vtu::Field;
-use super::{PvdEntry, pvd};
+use super::{PvdEntry, bodies_file_name, contact_file_name, pvd};
 use crate::contact::solver::State;
 use crate::error::RunError;
 use crate::model::Model;
@@ -48,16 +48,6 @@ fn write_error(path: &Path, source: std::io::Error) -> RunError {
         path: path.display().to_string(),
         source,
     }
-}
-
-/// The name of the bodies dataset of `step` (case `stem`).
-pub fn bodies_file_name(stem: &str, step: usize) -> String {
-    format!("{stem}_{step:04}.vtu")
-}
-
-/// The name of the contact-face dataset of `step` (case `stem`).
-pub fn contact_file_name(stem: &str, step: usize) -> String {
-    format!("{stem}_contact_{step:04}.vtu")
 }
 
 /// The name of the contact table of `step`.
