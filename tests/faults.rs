@@ -105,24 +105,15 @@ fn a_run_killed_while_it_writes_leaves_whole_files_and_resumes() {
     // Killed at several points of its writing: once the state of step k exists, at once.
     for k in [1usize, 6, 13] {
         let out = dir.join(format!("killed-{k}"));
-        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-            .env("STICKSLIP_NO_CACHE", "1")
-            .args([
-                "run",
-                case.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-                "--quiet",
-            ])
-            .spawn()
-            .unwrap();
-        let t0 = std::time::Instant::now();
         let marker = out.join(format!("state_{k:04}.json"));
-        while !marker.exists() && t0.elapsed().as_secs() < 120 {
-            std::thread::sleep(std::time::Duration::from_micros(200));
-        }
-        child.kill().unwrap();
-        child.wait().unwrap();
+        let args = [
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ];
+        kill_when(&args, &[], 120, &|| marker.exists());
         let last = complete_files(&out);
         println!("killed after state {k}: last whole state {last}");
         assert!(
@@ -226,32 +217,18 @@ fn a_run_killed_while_it_writes_the_cache_leaves_a_usable_cache() {
     for attempt in 0..5 {
         let _ = std::fs::remove_dir_all(&cache);
         let out = dir.join(format!("killed-{attempt}"));
-        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-            .env_remove("STICKSLIP_NO_CACHE")
-            .args([
-                "run",
-                case.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-                "--quiet",
-            ])
-            .args(["--cache", cache.to_str().unwrap()])
-            .spawn()
-            .unwrap();
-        let t0 = std::time::Instant::now();
-        let mut seen = false;
-        while t0.elapsed().as_secs() < 60 {
-            if temporaries(&cache) > 0 {
-                seen = true;
-                break;
-            }
-            if child.try_wait().unwrap().is_some() {
-                break;
-            }
-            std::thread::sleep(std::time::Duration::from_micros(100));
-        }
-        let _ = child.kill();
-        child.wait().unwrap();
+        let args = [
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+            "--cache",
+            cache.to_str().unwrap(),
+        ];
+        let seen = kill_when(&args, &[("STICKSLIP_NO_CACHE", "")], 60, &|| {
+            temporaries(&cache) > 0
+        });
         if !seen {
             continue;
         }

@@ -244,24 +244,16 @@ fn a_resumed_run_writes_what_the_uninterrupted_run_writes() {
 
     // Killed part-way (once a state past step 30 exists), then resumed from the directory.
     let killed = dir.join("killed");
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        // No model cache: tests leave the user's cache directory alone.
-        .env("STICKSLIP_NO_CACHE", "1")
-        .args([
-            "run",
-            case.to_str().unwrap(),
-            "--out",
-            killed.to_str().unwrap(),
-        ])
-        .args(["--quiet", "--threads", "1"])
-        .spawn()
-        .unwrap();
-    let t0 = std::time::Instant::now();
-    while states(&killed).len() < 4 && t0.elapsed().as_secs() < 120 {
-        std::thread::sleep(std::time::Duration::from_millis(2));
-    }
-    child.kill().unwrap();
-    child.wait().unwrap();
+    let args = [
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        killed.to_str().unwrap(),
+        "--quiet",
+        "--threads",
+        "1",
+    ];
+    common::kill_when(&args, &[], 120, &|| states(&killed).len() >= 4);
     let kept = states(&killed).len();
     println!("killed with {kept} states written");
     let (code, err) = run(&case, &killed, &["--resume", killed.to_str().unwrap()]);

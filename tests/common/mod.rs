@@ -646,3 +646,44 @@ pub fn file_names(dir: &Path) -> Vec<String> {
     names.sort();
     names
 }
+
+/// Starts `stickslip ARGS` (with `envs` set; `STICKSLIP_NO_CACHE=1` unless `envs` clears it by
+/// giving it empty), polls `until` every 200 µs for at most `secs` seconds, then kills the
+/// process (SIGKILL) if it is still running. Returns whether `until` held before the kill.
+pub fn kill_when(
+    args: &[&str],
+    envs: &[(&str, &str)],
+    secs: u64,
+    until: &dyn Fn() -> bool,
+) -> bool {
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"));
+    cmd.env("STICKSLIP_NO_CACHE", "1");
+    for (k, v) in envs {
+        if v.is_empty() {
+            cmd.env_remove(k);
+        } else {
+            cmd.env(k, v);
+        }
+    }
+    let mut child = cmd
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    let mut held = false;
+    while t0.elapsed().as_secs() < secs {
+        if until() {
+            held = true;
+            break;
+        }
+        if child.try_wait().unwrap().is_some() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_micros(200));
+    }
+    let _ = child.kill();
+    child.wait().unwrap();
+    held
+}
