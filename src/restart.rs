@@ -40,6 +40,9 @@ pub struct SavedRun {
     /// The `.pvd` entries up to this state, made from the journal's written steps.
     #[serde(skip)]
     pub pvd: Vec<PvdEntry>,
+    /// The journal's lines up to this state, which a resumed run's journal begins with.
+    #[serde(skip)]
+    pub journal: String,
     pub energy: Option<EnergySaved>,
 }
 
@@ -176,20 +179,6 @@ pub fn load(path: &Path, case: &Case, case_path: &Path) -> Result<SavedRun, RunE
         ));
     }
     let id = run_id(case, case_path)?;
-    let mut saved = saved;
-    if saved.id == id {
-        let dir = file.parent().unwrap_or(Path::new("."));
-        let lines = read_journal(dir, saved.steps).map_err(|why| bad(&file, why))?;
-        let stem = case_path
-            .file_stem()
-            .map(|s| s.to_string_lossy().to_string())
-            .unwrap_or("case".into());
-        saved.pvd = pvd_entries(&lines, &stem);
-        if let Some(e) = saved.energy.as_mut() {
-            e.set_rows(lines.iter().filter_map(|l| l.energy.clone()).collect());
-        }
-        saved.checkpoint.records = lines.into_iter().map(|l| l.record).collect();
-    }
     if saved.id != id {
         return Err(bad(
             &file,
@@ -201,6 +190,19 @@ pub fn load(path: &Path, case: &Case, case_path: &Path) -> Result<SavedRun, RunE
             ),
         ));
     }
+    let mut saved = saved;
+    let dir = file.parent().unwrap_or(Path::new("."));
+    let lines = read_journal(dir, saved.steps).map_err(|why| bad(&file, why))?;
+    let stem = case_path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or("case".into());
+    saved.pvd = pvd_entries(&lines, &stem);
+    saved.journal = journal_text(&lines);
+    if let Some(e) = saved.energy.as_mut() {
+        e.set_rows(lines.iter().filter_map(|l| l.energy.clone()).collect());
+    }
+    saved.checkpoint.records = lines.into_iter().map(|l| l.record).collect();
     Ok(saved)
 }
 

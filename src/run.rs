@@ -4,8 +4,7 @@
 
 use crate::case::Case;
 pub use crate::driver::{
-    LogLevel, MAX_CUTBACKS, Restart, STEP_BUDGET, STEP_BUDGET_MIN, Simulation, StepEvent, simulate,
-    simulate_with, step_budget,
+    LogLevel, MAX_CUTBACKS, Restart, Simulation, StepEvent, simulate, simulate_with,
 };
 use crate::energy::EnergyMeter;
 pub use crate::error::RunError;
@@ -242,23 +241,7 @@ pub fn run_model(
     // with the records of the state a resumed run goes on from.
     let journal_path = out_dir.join(restart::JOURNAL);
     let mut journal = if case.output.vtu {
-        let start = resume.as_ref().map_or(String::new(), |s| {
-            let rows = s.energy.as_ref().map(|e| e.rows().to_vec());
-            let lines: Vec<restart::JournalLine> = s
-                .checkpoint
-                .records
-                .iter()
-                .enumerate()
-                .map(|(i, r)| restart::JournalLine {
-                    record: r.clone(),
-                    energy: rows.as_ref().and_then(|rows| rows.get(i).cloned()),
-                    written: s.pvd.iter().any(|e| {
-                        e.part == 0 && e.file == crate::output::bodies_file_name(&stem, r.step)
-                    }),
-                })
-                .collect();
-            restart::journal_text(&lines)
-        });
+        let start = resume.as_ref().map_or("", |s| s.journal.as_str());
         let journal_error = |source| RunError::Write {
             path: journal_path.display().to_string(),
             source,
@@ -355,6 +338,7 @@ pub fn run_model(
                         checkpoint: c.clone(),
                         steps: ev.step,
                         pvd: Vec::new(),
+                        journal: String::new(),
                         energy: energy.as_ref().map(EnergyMeter::saved),
                     }),
                 };

@@ -418,7 +418,7 @@ impl Driver<'_> {
         // Failed attempts since the last nominal fraction reached.
         let mut attempts = 0usize;
         // The load of a probe past a stalled one, to attempt next, and whether one was tried
-        // since the last converged step.
+        // since the last nominal load reached.
         let mut probe: Option<f64> = None;
         let mut probed = false;
         let mut cutbacks = 0;
