@@ -842,20 +842,12 @@ impl LuCache {
     }
 
     /// What a resumed run needs to rebuild the state kept by [`Self::end_step`] (see
-    /// [`BlockRecord`]); `None` when no block is factorised.
+    /// [`BlockRecord`]; the block's unknowns and batches are empty when none is factorised);
+    /// `None` when nothing is kept.
     pub fn checkpoint(&self) -> Option<BlockRecord> {
-        let block = self.k_llt.is_some();
-        (block || !self.products.is_empty()).then(|| BlockRecord {
-            unk: if block {
-                self.k_unk.clone()
-            } else {
-                Vec::new()
-            },
-            batches: if block {
-                self.batches.clone()
-            } else {
-                Vec::new()
-            },
+        (self.k_llt.is_some() || !self.products.is_empty()).then(|| BlockRecord {
+            unk: self.k_unk.clone(),
+            batches: self.batches.clone(),
             bt: self.bt.clone(),
             xt: self.xt.clone(),
             products: self.products.clone(),
