@@ -1,4 +1,4 @@
-//! Ordering benchmark: faer's AMD against [`stickslip::ordering::nested_dissection`] on the
+//! Ordering benchmark: faer's AMD against [`stickslip::la::ordering::nested_dissection`] on the
 //! real stiffness matrix of both VM272 half-cylinders (faces `bottom` and `top` clamped, so
 //! that both bodies are held without a pilot), levels of the mesh ladder.
 //!
@@ -20,7 +20,7 @@ use stickslip::assembly::UpperCsc;
 #[path = "common/clamped.rs"]
 mod clamped;
 use clamped::stiffness;
-use stickslip::ordering::{self, Ordering};
+use stickslip::la::ordering::{self, Ordering};
 
 fn levels() -> Vec<usize> {
     let s = std::env::var("ORDERING_LEVELS").unwrap_or_else(|_| "4-7".into());

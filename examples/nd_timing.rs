@@ -24,9 +24,11 @@ fn main() {
         for (i, best) in best.iter_mut().enumerate() {
             let t = Instant::now();
             let fwd = if i == 0 {
-                one.install(|| stickslip::ordering::nested_dissection(k.n, &k.col_ptr, &k.row_idx))
+                one.install(|| {
+                    stickslip::la::ordering::nested_dissection(k.n, &k.col_ptr, &k.row_idx)
+                })
             } else {
-                stickslip::ordering::nested_dissection(k.n, &k.col_ptr, &k.row_idx)
+                stickslip::la::ordering::nested_dissection(k.n, &k.col_ptr, &k.row_idx)
             };
             *best = best.min(t.elapsed().as_secs_f64());
             let h = fwd.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &v| {

@@ -5,7 +5,7 @@ use stickslip::assembly::{self, UpperCsc};
 use stickslip::condense::Condensed;
 use stickslip::dofs::{DofMap, SupportSpec};
 use stickslip::elasticity::Material;
-use stickslip::linsolve::PartialSymbolic;
+use stickslip::la::PartialSymbolic;
 
 fn main() {
     let lvl: usize = std::env::args().nth(1).expect("LEVEL").parse().unwrap();

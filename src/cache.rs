@@ -43,6 +43,7 @@
 //! time) before a new one is written; an entry larger than the cap is not written.
 
 use crate::case::Case;
+use crate::la::DenseColumns;
 use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
@@ -284,7 +285,7 @@ pub fn model_key(case: &Case, mesh_bytes: &[u8], gap: Option<f64>) -> Result<Key
     k.u64(FORMAT as u64);
     k.str(env!("CARGO_PKG_VERSION"));
     k.u64(build_id()?);
-    k.str(crate::linsolve::ordering_policy());
+    k.str(crate::la::ordering::ordering_policy());
     k.bytes(mesh_bytes);
     k.u64(case.bodies.len() as u64);
     for b in &case.bodies {
@@ -332,7 +333,7 @@ pub enum Words {
     F64(Vec<f64>),
     /// Floats shared with the model (the factor values: written while the run goes on, or,
     /// when the entry has a draft, already in its file and only hashed).
-    Shared(crate::linsolve::SharedValues),
+    Shared(crate::la::SharedValues),
     /// Columns `(j, from)` of a dense matrix shared with the model, each from row `from` on,
     /// one after the other (the Delassus operator and its Cholesky factor: 130 and 65 MB at
     /// L7, which a copy would add to the run's peak memory).
@@ -359,26 +360,6 @@ fn in_chunks<'a>(
         f(&buf)?;
     }
     Ok(())
-}
-
-/// A dense column-major matrix whose columns a cache entry can be written from.
-pub trait DenseColumns: Send + Sync {
-    fn rows(&self) -> usize;
-    /// Column `j` from row `from` on.
-    fn column(&self, j: usize, from: usize) -> &[f64];
-}
-
-impl DenseColumns for faer::Mat<f64> {
-    fn rows(&self) -> usize {
-        self.nrows()
-    }
-    fn column(&self, j: usize, from: usize) -> &[f64] {
-        &self
-            .col(j)
-            .try_as_col_major()
-            .expect("the columns of a Mat are contiguous")
-            .as_slice()[from..]
-    }
 }
 
 impl Words {
@@ -1055,7 +1036,7 @@ impl Reader {
     /// them and evicted by deleting them, neither of which changes a mapped file; a file cut
     /// short by another program while a run reads it would stop that run (`SIGBUS`).
     pub fn map_next(&mut self) -> Result<(u32, Unchecked), String> {
-        use crate::linsolve::FactorValues;
+        use crate::la::FactorValues;
         let read = |r: &mut Reader| -> Result<(u32, Unchecked), String> {
             let (tag, words) = r.read_next()?;
             let v = words.into_f64().ok_or_else(|| {
@@ -1107,7 +1088,7 @@ impl Reader {
 /// Floats of a section from [`Reader::map_next`], to be checked against their hash.
 pub enum Unchecked {
     /// Read (and checked) already.
-    Read(crate::linsolve::FactorValues),
+    Read(crate::la::FactorValues),
     /// Mapped: the hash and the section's place (1-based number, of how many) for the report.
     Mapped {
         words: MappedWords,
@@ -1118,7 +1099,7 @@ pub enum Unchecked {
 
 impl Unchecked {
     /// The floats, once their bytes match the section's hash.
-    pub fn check(self) -> Result<crate::linsolve::FactorValues, String> {
+    pub fn check(self) -> Result<crate::la::FactorValues, String> {
         match self {
             Unchecked::Read(v) => Ok(v),
             Unchecked::Mapped {
@@ -1138,7 +1119,7 @@ impl Unchecked {
                 }
                 #[cfg(unix)]
                 let _ = words.map.advise(memmap2::Advice::Normal);
-                Ok(crate::linsolve::FactorValues::Mapped(words))
+                Ok(crate::la::FactorValues::Stored(Box::new(words)))
             }
         }
     }
@@ -1205,6 +1186,24 @@ impl MappedWords {
         // SAFETY: aligned, in bounds, little-endian f64 words (checked above); any bit pattern
         // is a valid f64; the mapping lives as long as `self`.
         unsafe { std::slice::from_raw_parts(b.as_ptr().cast::<f64>(), self.len) }
+    }
+}
+
+impl crate::la::StoredValues for MappedWords {
+    fn as_f64(&self) -> &[f64] {
+        MappedWords::as_f64(self)
+    }
+}
+
+impl crate::la::ValuesDestination for WritableSection {
+    fn as_mut_f64(&mut self) -> &mut [f64] {
+        WritableSection::as_mut_f64(self)
+    }
+    fn populate(&self) -> bool {
+        WritableSection::populate(self)
+    }
+    fn into_stored(self: Box<Self>) -> Box<dyn crate::la::StoredValues> {
+        Box::new(self.into_mapped())
     }
 }
 
@@ -1588,7 +1587,7 @@ mod tests {
         let n = CHUNK / 8 + 5; // more than a chunk
         let f: Vec<f64> = (0..n).map(|i| (i as f64).sqrt() - 3.5).collect();
         let u: Vec<usize> = (0..n).map(|i| i * 2_654_435_761).collect();
-        let shared = std::sync::Arc::new(crate::linsolve::FactorValues::Owned(f.clone()));
+        let shared = std::sync::Arc::new(crate::la::FactorValues::Owned(f.clone()));
         for w in [
             Words::F64(f.clone()),
             Words::U64(u.iter().map(|&x| x as u64).collect()),

@@ -21,9 +21,7 @@
 //! every equation (it appears as the force `k_g u` the spring would carry).
 
 use crate::assembly::UpperCsc;
-use crate::linsolve::{
-    FactorError, PartialCholesky, PartialSymbolic, SaddleFactor, SaddleSymbolic,
-};
+use crate::la::{FactorError, PartialCholesky, PartialSymbolic, SaddleFactor, SaddleSymbolic};
 
 /// The factorisation behind a [`Condensed`] system.
 pub enum Factor {
@@ -38,7 +36,7 @@ pub enum Factor {
 impl Factor {
     /// Gives up the factor's hold on its values ([`SaddleFactor::release`]): `None` for a
     /// factor without contact, whose solves a run needs to its end. Any later solve panics.
-    pub fn release(&self) -> Option<crate::linsolve::SharedValues> {
+    pub fn release(&self) -> Option<crate::la::SharedValues> {
         match self {
             Factor::Partial(_) => None,
             Factor::Saddle(s) => s.release(),
@@ -62,7 +60,7 @@ impl Factor {
     }
 
     /// As [`Self::solve_block_in_place`], the columns of a saddle factor in one sweep on the
-    /// calling thread ([`crate::linsolve::SaddleFactor::solve_block_in_place_one_sweep`]).
+    /// calling thread ([`crate::la::SaddleFactor::solve_block_in_place_one_sweep`]).
     pub fn solve_block_in_place_one_sweep(&self, b: &mut [f64], ncols: usize) {
         match self {
             Factor::Partial(c) => c.solve_block_in_place(b, ncols),
@@ -145,7 +143,7 @@ impl Condensed {
         grounded: &[usize],
         y_rows: &[Vec<(usize, f64)>],
         symbolic: &SaddleSymbolic,
-        dest: Option<crate::cache::WritableSection>,
+        dest: Option<Box<dyn crate::la::ValuesDestination>>,
     ) -> Result<Condensed, FactorError> {
         let (values, grounding, krr_scale) = grounded_values(k, n_i, grounded);
         let chol = Factor::Saddle(symbolic.factorise_in(&values, y_rows, dest)?);

@@ -2,7 +2,7 @@
 //! with a slip-weakening friction coefficient (Papangelo, Ciavarella & Barber).
 //!
 //! Pipeline: [`mesh`] (gmsh reader and checks) → [`dofs`] → [`assembly`] of [`elasticity`]
-//! on [`shapes::tri6`] → [`linsolve`] (faer Cholesky) → [`condense`] onto retained DOFs →
+//! on [`shapes::tri6`] → [`la`] (orderings, sparse and dense factorisations) → [`condense`] onto retained DOFs →
 //! [`run`] (load stages) → [`output`] (VTK, CSV, JSON). Closed forms live in [`analytic`].
 
 pub mod analytic;
@@ -18,11 +18,10 @@ pub mod elasticity;
 pub mod energy;
 pub mod error;
 pub mod friction;
-pub mod linsolve;
+pub mod la;
 pub mod loads;
 pub mod mesh;
 pub mod model;
-pub mod ordering;
 pub mod output;
 pub mod probe;
 pub mod quadrature;
@@ -30,7 +29,5 @@ pub mod report;
 pub mod restart;
 pub mod run;
 pub mod shapes;
-pub mod simd;
-pub mod supernodal;
 pub mod sweep;
 pub mod trace;

@@ -8,7 +8,7 @@ use stickslip::assembly::{self, UpperCsc};
 use stickslip::condense::Condensed;
 use stickslip::dofs::{DofMap, SupportSpec};
 use stickslip::elasticity::Material;
-use stickslip::linsolve::PartialSymbolic;
+use stickslip::la::PartialSymbolic;
 
 /// Dense Schur complement K_RR − K_RI K_II⁻¹ K_IR by Gaussian elimination of the first n_i
 /// unknowns of the full symmetric matrix.

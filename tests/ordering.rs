@@ -7,7 +7,7 @@ use faer::Side;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::cholesky::{self, SymbolicCholeskyRaw};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use stickslip::ordering::{self, Ordering};
+use stickslip::la::ordering::{self, Ordering};
 
 /// Upper CSC (sorted rows, diagonal included) of an `nx × ny` grid with `dofs` unknowns per
 /// node coupled to every unknown of the 8 neighbouring nodes (the 9-point stencil of

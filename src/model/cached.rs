@@ -20,7 +20,7 @@
 use crate::assembly::UpperCsc;
 use crate::cache::{self, Entry, Key, Open, Report, Status, Store, Words};
 use crate::condense::{Condensed, Factor};
-use crate::linsolve::{PartialSymbolic, SaddleFactor};
+use crate::la::{PartialSymbolic, SaddleFactor};
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Instant;
@@ -40,7 +40,7 @@ mod tag {
     pub const W0_PRESCRIBED: u32 = 11;
     /// Always the first section.
     pub const VALUES: u32 = 12;
-    /// The supernodal layout of a contact model's factor ([`crate::linsolve::Supernodes`]).
+    /// The supernodal layout of a contact model's factor ([`crate::la::Supernodes`]).
     pub const SN_BEGIN: u32 = 13;
     pub const SN_ROW_PTR: u32 = 14;
     pub const SN_ROWS: u32 = 15;
@@ -306,7 +306,7 @@ fn restore(
     };
     // A contact model's supernodal layout (its ordering is the stored one, then the rows).
     let layout = if sizes.contact {
-        Some(crate::linsolve::Supernodes {
+        Some(crate::la::Supernodes {
             begin: take_u(tag::SN_BEGIN, "supernodes")?,
             row_ptr: take_u(tag::SN_ROW_PTR, "supernodes")?,
             rows: take_u(tag::SN_ROWS, "supernodes")?,
@@ -430,6 +430,6 @@ fn restore(
 
 enum Analysis {
     /// The checked layout of a contact model's factor.
-    Layout(Arc<crate::linsolve::Supernodes>),
+    Layout(Arc<crate::la::Supernodes>),
     Partial(PartialSymbolic),
 }

@@ -10,7 +10,7 @@ use crate::case::{Case, TractionKind};
 use crate::condense::Condensed;
 use crate::dofs::{DofMap, SupportSpec};
 use crate::elasticity::{self, Material};
-use crate::linsolve::{PartialSymbolic, SaddleSymbolic};
+use crate::la::{PartialSymbolic, SaddleSymbolic};
 use crate::loads::{EdgeOrientation, Traction};
 use crate::mesh::{Mesh, check};
 use std::time::Instant;
@@ -33,7 +33,7 @@ pub enum ModelError {
         source: crate::loads::DanglingEdge,
     },
     #[error(transparent)]
-    Factor(#[from] crate::linsolve::FactorError),
+    Factor(#[from] crate::la::FactorError),
     #[error("{path}: {source}")]
     Contact {
         path: String,
@@ -77,7 +77,7 @@ pub struct Timings {
 }
 
 /// The modelled floating-point operations of a contact model's numeric factorisation, from its
-/// symbolic analysis ([`crate::linsolve::SaddleSymbolic::flops`]): a count that does not depend
+/// symbolic analysis ([`crate::la::SaddleSymbolic::flops`]): a count that does not depend
 /// on the machine, beside the measured `factorise` time.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct FactorFlops {
@@ -237,7 +237,7 @@ impl Model {
         // run sequentially: in parallel, some split their sums by the number of threads, and a
         // run's results then depended on `--threads` (at 1e-10 on Fig. 2 at L5). The sparse
         // factorisation and the Delassus product take the threads explicitly
-        // (`linsolve::factor_parallelism`); with them the results do not depend on the thread
+        // (`la::factor_parallelism`); with them the results do not depend on the thread
         // count (`tests/determinism.rs`).
         faer::set_global_parallelism(faer::Par::Seq);
         let path = mesh.source.display().to_string();
@@ -618,7 +618,7 @@ impl Model {
     /// [`Model::nodal_stresses_many`] of at most `R` fields (the lanes past them zero).
     fn nodal_stresses_lanes<const R: usize>(&self, us: &[&[f64]]) -> Vec<Vec<[f64; 4]>> {
         #[cfg(target_arch = "x86_64")]
-        if crate::simd::avx2() {
+        if crate::la::simd::avx2() {
             // SAFETY: the processor has AVX2 (checked at run time).
             return unsafe { self.nodal_stresses_lanes_avx2::<R>(us) };
         }
@@ -789,7 +789,10 @@ fn factorise(
                 crate::cache::Draft::create(store, key, symbolic.len_val())
             });
             let (draft, dest) = match draft {
-                Some(d) => (Some(d.file), Some(d.values)),
+                Some(d) => (
+                    Some(d.file),
+                    Some(Box::new(d.values) as Box<dyn crate::la::ValuesDestination>),
+                ),
                 None => (None, None),
             };
             let condensed = Condensed::build_saddle(k, n_i, grounded, &y_free, &symbolic, dest)?;

@@ -109,7 +109,7 @@ impl Model {
         mut each: impl FnMut(usize, &[[f64; R]; 12], &[[f64; R]; 12], f64),
     ) {
         #[cfg(target_arch = "x86_64")]
-        if crate::simd::avx2() {
+        if crate::la::simd::avx2() {
             // SAFETY: the processor has AVX2 (checked at run time).
             return unsafe { self.each_element_forces_avx2(uu, &mut each) };
         }

@@ -11,7 +11,7 @@ use stickslip::assembly::{self, UpperCsc};
 use stickslip::condense::Condensed;
 use stickslip::dofs::{DofMap, SupportSpec};
 use stickslip::elasticity::{self, Material};
-use stickslip::linsolve::PartialSymbolic;
+use stickslip::la::PartialSymbolic;
 use stickslip::mesh::{Group, GroupDim, Mesh, Tri6};
 use stickslip::quadrature::TRI_7;
 use stickslip::shapes::tri6;

@@ -12,7 +12,7 @@ use std::time::Instant;
 
 /// `x += a g`.
 fn axpy(x: &mut [f64], a: f64, g: &[f64]) {
-    if crate::simd::avx2() {
+    if crate::la::simd::avx2() {
         // SAFETY: the processor has AVX2 (checked above).
         unsafe { axpy_avx2(x, a, g) }
     } else {
@@ -56,7 +56,7 @@ pub(super) fn add_columns(
             (&c.as_slice()[..m], a)
         })
         .collect();
-    if crate::simd::avx2() {
+    if crate::la::simd::avx2() {
         // SAFETY: the processor has AVX2 (checked above).
         unsafe { add_columns_avx2(y, &cols) }
     } else {
@@ -117,7 +117,7 @@ pub(super) fn add_columns_pair(y1: &mut [f64], y2: &mut [f64], w: &Mat<f64>, a: 
             (&c.as_slice()[..m], a[j], b[j])
         })
         .collect();
-    if crate::simd::avx2() {
+    if crate::la::simd::avx2() {
         // SAFETY: the processor has AVX2 (checked above).
         unsafe { add_columns_pair_avx2(y1, y2, &cols) }
     } else {
@@ -181,7 +181,7 @@ unsafe fn add_columns_pair_avx2(y1: &mut [f64], y2: &mut [f64], cols: &[(&[f64],
 pub(super) fn matvec_replace(dst: &mut [f64], a: faer::MatRef<'_, f64>, x: &[f64]) {
     assert!(a.nrows() == dst.len() && a.ncols() == x.len());
     #[cfg(target_arch = "x86_64")]
-    if crate::simd::avx2() && std::arch::is_x86_feature_detected!("fma") {
+    if crate::la::simd::avx2() && std::arch::is_x86_feature_detected!("fma") {
         let m = dst.len();
         let cols: Vec<&[f64]> = (0..a.ncols())
             .map(|j| {
@@ -441,9 +441,9 @@ impl Block {
                 col[i] = wj[unk[i]];
             }
         };
-        let mut l = crate::linsolve::mat_filled(n, n, parallel, lower);
+        let mut l = crate::la::par::mat_filled(n, n, parallel, lower);
         let par = if parallel && !crate::cache::writing() {
-            crate::linsolve::factor_parallelism()
+            crate::la::par::factor_parallelism()
         } else {
             faer::Par::Seq
         };
@@ -522,7 +522,7 @@ impl Block {
 /// AVX2 and FMA, or `L` or `b` is not contiguous by columns: faer's own then.
 fn forward_one(l: faer::MatRef<'_, f64>, b: faer::ColMut<'_, f64>) -> bool {
     #[cfg(target_arch = "x86_64")]
-    if crate::simd::avx2()
+    if crate::la::simd::avx2()
         && std::arch::is_x86_feature_detected!("fma")
         && l.row_stride() == 1
         && l.nrows() > 0
@@ -628,7 +628,7 @@ fn outside(w: &Mat<f64>, unk: &[usize], parallel: bool) -> (Vec<usize>, Mat<f64>
             *c = wq[r];
         }
     };
-    let w_out = crate::linsolve::mat_filled(out_rows.len(), unk.len(), parallel, column);
+    let w_out = crate::la::par::mat_filled(out_rows.len(), unk.len(), parallel, column);
     (out_rows, w_out)
 }
 

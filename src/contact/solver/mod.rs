@@ -11,7 +11,7 @@
 //! gives every nodal gap `ĝ = g0 + (Y u_R)_n`, relative tangential displacement
 //! `v̂ = (Y u_R)_t` and the pilot displacement from `μ` alone. `W` (the Delassus operator) is
 //! dense and small and is built once per model, from the trailing block of the factorised
-//! saddle-point matrix `[K̂ Yᵀ; Y 0]` ([`crate::linsolve::SaddleSymbolic`]); each Newton iteration is a dense solve on the
+//! saddle-point matrix `[K̂ Yᵀ; Y 0]` ([`crate::la::SaddleSymbolic`]); each Newton iteration is a dense solve on the
 //! active unknowns.
 //!
 //! Complementarity at each slave node j (forces, gaps and slips are nodal quantities):
@@ -247,7 +247,7 @@ pub struct ContactSystem {
 /// (`W[order, order] = C Cᵀ`): the anchors, then the slave nodes by increasing initial gap,
 /// each node's normal then tangential unknown. The saddle-point factorisation gives it with
 /// no extra work when its constraint rows are in this order
-/// ([`crate::linsolve::SaddleFactor::delassus`]), and the leading `p × p` block of `C` is the
+/// ([`crate::la::SaddleFactor::delassus`]), and the leading `p × p` block of `C` is the
 /// Cholesky factor of `W` restricted to the first `p` unknowns of the order. A contact zone
 /// that grows from the first point of contact is such a leading set (up to a few nodes), so
 /// the structured solve takes its Delassus block from `C` instead of factorising it.
@@ -260,7 +260,7 @@ pub struct PrefixFactor {
     pub pos: Vec<usize>,
 }
 
-impl crate::cache::DenseColumns for PrefixFactor {
+impl crate::la::DenseColumns for PrefixFactor {
     fn rows(&self) -> usize {
         self.c.nrows()
     }
@@ -451,7 +451,7 @@ fn w_rows_times(w: &Mat<f64>, x: &[f64], rows: &[usize]) -> Vec<f64> {
     for group in rows.chunks(LANES) {
         // A group of fewer rows repeats its last one in the spare lanes.
         let c: [&[f64]; LANES] = std::array::from_fn(|k| col(group[k.min(group.len() - 1)]));
-        let acc = if crate::simd::avx2() {
+        let acc = if crate::la::simd::avx2() {
             // SAFETY: the processor has AVX2 (checked above).
             unsafe { dot_lanes_avx2(&c, x) }
         } else {

@@ -21,7 +21,7 @@
 //! but the root; where the root holds the constraint block (a saddle-point matrix), it is
 //! factorised in two stages (the top separator's columns, then the block, with `W` copied in
 //! between), which is faer's one dense `L D Lᵀ` within round-off
-//! (`linsolve::tests::the_tree_scheduled_factor_is_faers_below_the_root_bit_for_bit`). The
+//! (`la::tests::the_tree_scheduled_factor_is_faers_below_the_root_bit_for_bit`). The
 //! values do not depend on the number of threads: the partition into subtrees is fixed by the
 //! tree alone, every update is a sequential kernel call on its own columns, and the dense
 //! kernels split their work without changing any sum's order.
@@ -724,7 +724,7 @@ struct Schur {
     s: usize,
     kk: usize,
     w: Option<faer::Mat<f64>>,
-    /// An array for `w` made earlier ([`crate::linsolve::Spare`]), if any.
+    /// An array for `w` made earlier ([`crate::la::par::Spare`]), if any.
     spare: Option<faer::Mat<f64>>,
     /// Wall time of the constraint block: the updates of its columns, the elimination of the
     /// leading columns from it and its `L D Lᵀ`.
@@ -770,7 +770,7 @@ impl Schur {
             let m = a_mk.nrows();
             let (l_kk, l_mk) = (a_kk.rb(), a_mk.rb());
             // B = L_MK D_K: A_MM −= B L_MKᵀ.
-            let b = crate::linsolve::mat_filled(m, kk, true, |k, col| {
+            let b = crate::la::par::mat_filled(m, kk, true, |k, col| {
                 let d = l_kk[(k, k)];
                 for (i, x) in col.iter_mut().enumerate() {
                     *x = l_mk[(i, k)] * d;
@@ -790,7 +790,7 @@ impl Schur {
         }
         let m = a_mm.nrows();
         let view = a_mm.rb();
-        self.w = Some(crate::linsolve::mat_filled_in(
+        self.w = Some(crate::la::par::mat_filled_in(
             self.spare.take(),
             m,
             m,
