@@ -15,6 +15,22 @@ use stages::StageItem;
 pub(crate) use stages::deserialize_stages;
 use std::path::{Path, PathBuf};
 
+
+/// How the contact conditions are enforced.
+#[derive(
+    Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Semi-smooth Newton (primal–dual active set) on the complementarity functions: exact.
+    Newton,
+    /// Penalty: `F_n = ε max(0, −ĝ)`, tangential spring `ε`; `ε = κ E* w_j / h_j`.
+    Penalty,
+    /// Augmented Lagrangian: penalty with an outer multiplier update (Uzawa) until the largest
+    /// penetration is below `tolerance × h`.
+    AugmentedLagrangian,
+}
+
 /// A whole case.
 #[derive(Clone, Debug, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -94,7 +110,7 @@ pub struct ContactSpec {
     /// `newton` (semi-smooth Newton / primal–dual active set, default), `penalty` or
     /// `augmented_lagrangian`.
     #[serde(default = "default_method")]
-    pub method: crate::contact::solver::Method,
+    pub method: Method,
     /// Penalty factor κ: stiffness `κ E* w_j / h_j` per node (penalty and augmented
     /// Lagrangian; default 100).
     #[serde(default)]
@@ -130,8 +146,8 @@ pub enum NormalKind {
     Local,
 }
 
-fn default_method() -> crate::contact::solver::Method {
-    crate::contact::solver::Method::Newton
+fn default_method() -> Method {
+    Method::Newton
 }
 
 /// How one pilot component is driven at the end of a stage.

@@ -7,7 +7,7 @@
 //! ([`ContactSystem::newton_rows`]) are both assembled from that list, and
 //! [`ContactSystem::newton_residual`] is the unlinearised function whose Jacobian they are.
 
-use super::{ContactSystem, Iterate, Method, PilotDrive, State, Status};
+use super::system::{ContactSystem, Iterate, Method, PilotDrive, State, Status};
 use crate::friction::FrictionLaw;
 use faer::Mat;
 

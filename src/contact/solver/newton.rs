@@ -3,10 +3,11 @@
 //! safeguards against cycling and stalling.
 
 use super::enforce::Trial;
-use super::linalg::{STRUCTURED_MIN, solve_dense};
-use super::{
-    ContactError, ContactSystem, Iterate, LuCache, Method, NewtonSystem, Options, PilotDrive,
-    State, Status, StepOutcome,
+use super::factors::{LuCache, STRUCTURED_MIN};
+use crate::la::dense::solve_dense;
+use super::enforce::NewtonSystem;
+use super::system::{
+    ContactError, ContactSystem, Iterate, Method, Options, PilotDrive, State, Status, StepOutcome,
 };
 use crate::friction::{FrictionLaw, History};
 
@@ -596,7 +597,7 @@ impl ContactSystem {
 fn predicted_start(mu: &[f64], prev: &State, ns: usize, t: Option<f64>) -> Vec<f64> {
     let (f_n, rest) = mu.split_at(ns);
     let (f_t, z) = rest.split_at(ns);
-    super::predicted_forces(
+    super::system::predicted_forces(
         [f_n, f_t, z],
         [&prev.f_n, &prev.f_t, &prev.z],
         t.unwrap_or(1.0),

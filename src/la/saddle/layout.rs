@@ -231,23 +231,6 @@ impl Ahead {
 /// factor (`nodes`: per supernode of K its first column, its columns of K, the pattern rows of
 /// K and its values), in place on the permuted columns `x` of length `size` each.
 pub(super) fn sweep_leading(nodes: &[(usize, usize, usize, Node<'_>)], x: &mut [f64], size: usize) {
-    #[cfg(target_arch = "x86_64")]
-    if crate::la::simd::avx2() {
-        // SAFETY: the processor has AVX2 (checked at run time).
-        return unsafe { sweep_leading_avx2(nodes, x, size) };
-    }
-    sweep_leading_body(nodes, x, size)
-}
-
-/// [`sweep_leading`] compiled for AVX2 (the same operations in the same order, so the same
-/// bits: Rust does not contract `a * b + c` into a fused multiply-add).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-pub(super) unsafe fn sweep_leading_avx2(
-    nodes: &[(usize, usize, usize, Node<'_>)],
-    x: &mut [f64],
-    size: usize,
-) {
     sweep_leading_body(nodes, x, size)
 }
 
@@ -341,21 +324,6 @@ pub(super) fn sweep_leading_body(
 /// same bits as solved alone: the skipped columns of the forward sweep (a zero multiplier)
 /// keep their entries by a select, and the sums are [`dot`]'s, lane by lane.
 pub(super) fn sweep_leading_lanes<const R: usize>(
-    nodes: &[(usize, usize, usize, Node<'_>)],
-    x: &mut [[f64; R]],
-) {
-    #[cfg(target_arch = "x86_64")]
-    if crate::la::simd::avx2() {
-        // SAFETY: the processor has AVX2 (checked at run time).
-        return unsafe { sweep_leading_lanes_avx2(nodes, x) };
-    }
-    sweep_leading_lanes_body(nodes, x)
-}
-
-/// [`sweep_leading_lanes`] compiled for AVX2 (the same operations in the same order).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-pub(super) unsafe fn sweep_leading_lanes_avx2<const R: usize>(
     nodes: &[(usize, usize, usize, Node<'_>)],
     x: &mut [[f64; R]],
 ) {

@@ -471,9 +471,8 @@ fn a_zero_pivot_is_reported_by_either_loop_at_the_same_column() {
 }
 
 /// Columns swept together, interleaved (two, four or eight at a time, with a lane left
-/// over), give each the bits of its own sweep on a grid's saddle factor, on either
-/// instruction set: among them a
-/// zero column, a column of negative zeros (whose entries the forward sweep must leave as
+/// over), give each the bits of its own sweep on a grid's saddle factor: among them a zero
+/// column, a column of negative zeros (whose entries the forward sweep must leave as
 /// they are, as the one-column sweep skips them) and columns zero in most supernodes.
 #[test]
 fn interleaved_columns_give_the_bits_of_one_column_at_a_time() {
@@ -506,16 +505,11 @@ fn interleaved_columns_give_the_bits_of_one_column_at_a_time() {
         alone[2].iter().any(|v| v.to_bits() == (-0.0f64).to_bits()),
         "a column of negative zeros keeps some"
     );
-    let instruction_sets: &[&str] = if cfg!(target_arch = "x86_64") && crate::la::simd::avx2() {
-        &["baseline", "avx2"]
-    } else {
-        &["baseline"]
-    };
-    for &set in instruction_sets {
+    // The interleaved body itself, and `sweep_columns` (groups of eight and fewer).
+    for set in ["lanes", "columns"] {
         for ncols in 1..=9 {
             let mut x: Vec<f64> = (0..ncols).flat_map(column).collect();
-            if set == "baseline" {
-                // `sweep_columns` without its run-time choice: the interleaved body itself.
+            if set == "lanes" {
                 for g in x.chunks_mut(8 * size) {
                     let k = g.len() / size;
                     let mut lanes = vec![[0.0; 8]; size];
@@ -546,10 +540,10 @@ fn interleaved_columns_give_the_bits_of_one_column_at_a_time() {
     }
 }
 
-/// The sweeps compiled for AVX2 give the baseline's bits (and solve the system), on a 2-D
-/// grid whose supernodes have pattern rows enough for the vectorised sums.
+/// The sweeps solve the system to round-off on a 2-D grid whose supernodes have pattern rows
+/// enough for the four-way sums.
 #[test]
-fn the_sweeps_give_the_same_bits_on_either_instruction_set() {
+fn the_sweeps_solve_the_system() {
     let side = 24;
     let n = side * side;
     let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
@@ -606,16 +600,4 @@ fn the_sweeps_give_the_same_bits_on_either_instruction_set() {
         }
     }
     assert!(rhs.iter().all(|r| r.abs() < 1e-12), "residual");
-    #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        let mut wide = b.clone();
-        // SAFETY: the processor has AVX2 (checked just above).
-        unsafe { sweep_leading_avx2(&nodes, &mut wide, size) };
-        assert!(
-            wide.iter()
-                .zip(&base)
-                .all(|(a, b)| a.to_bits() == b.to_bits()),
-            "AVX2 and baseline sweeps differ"
-        );
-    }
 }
