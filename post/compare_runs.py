@@ -1,9 +1,12 @@
 #!/usr/bin/env python3
 """Compares two trees of run outputs (DIR_A/<case>/..., DIR_B/<case>/...) file by file, byte
 for byte, apart from what measures time: `summary.json` is compared without its timing and
-memory fields, its output directory and how the model cache served it (`cache`: a hit gives
-the same results as a cold run), `history.csv` and `energy.csv` without the `wall_s`
-column. Prints every file that differs and the count; exits 1 if any does.
+memory fields, its output directory, how the model cache served it (`cache`: a hit gives
+the same results as a cold run) and the bytes written (`output_bytes`: the files carry
+timings), `history.csv` and `energy.csv` without the `wall_s` column, the journal
+`steps.jsonl` line by line without its timings, and restart states without their timings and
+the program's identity (`id`: two builds differ in it by design). Prints every file that
+differs and the count; exits 1 if any does.
 
 Used to check that a restructure leaves the output of the shipped cases unchanged:
 
@@ -18,7 +21,7 @@ import os
 import sys
 
 TIMING_KEYS = {"timings_s", "contact_solve_s", "contact_phases_s", "peak_memory_mib", "wall_s", "output_dir",
-               "build_s", "sweep_s", "runs", "t_solve", "t_contact", "cache"}
+               "build_s", "sweep_s", "runs", "t_solve", "t_contact", "cache", "output_bytes"}
 
 
 def strip(d):
@@ -42,7 +45,7 @@ def main():
         sys.exit(__doc__)
     a, b = sys.argv[1], sys.argv[2]
     bad = 0
-    for case in sorted(os.listdir(a)):
+    for case in sorted(c for c in os.listdir(a) if os.path.isdir(os.path.join(a, c))):
         da, db = os.path.join(a, case), os.path.join(b, case)
         fa = sorted(os.listdir(da))
         fb = sorted(os.listdir(db)) if os.path.isdir(db) else []
@@ -52,8 +55,16 @@ def main():
             continue
         for f in fa:
             pa, pb = os.path.join(da, f), os.path.join(db, f)
-            if f.endswith(".json"):
+            if f.startswith("state_") and f.endswith(".json"):
+                ja, jb = json.load(open(pa)), json.load(open(pb))
+                ja.pop("id", None)
+                jb.pop("id", None)
+                same = strip(ja) == strip(jb)
+            elif f.endswith(".json"):
                 same = strip(json.load(open(pa))) == strip(json.load(open(pb)))
+            elif f.endswith(".jsonl"):
+                la, lb = open(pa).read().splitlines(), open(pb).read().splitlines()
+                same = [strip(json.loads(x)) for x in la] == [strip(json.loads(x)) for x in lb]
             elif f.endswith(".csv"):
                 same = csv_rows(pa) == csv_rows(pb)
             else:

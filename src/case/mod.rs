@@ -15,7 +15,6 @@ use stages::StageItem;
 pub(crate) use stages::deserialize_stages;
 use std::path::{Path, PathBuf};
 
-
 /// How the contact conditions are enforced.
 #[derive(
     Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,

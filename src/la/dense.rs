@@ -42,11 +42,7 @@ fn axpy_with(x: &mut [f64], a: f64, g: &[f64]) {
 /// `y += Σ_j W[:, j] a_j` over the `(j, a_j)` of `terms`, added to each entry in their order
 /// (the bits of one column at a time), four columns per pass over `y` (a quarter of the loads
 /// and stores of `y`).
-pub fn add_columns(
-    y: &mut [f64],
-    w: &Mat<f64>,
-    terms: impl IntoIterator<Item = (usize, f64)>,
-) {
+pub fn add_columns(y: &mut [f64], w: &Mat<f64>, terms: impl IntoIterator<Item = (usize, f64)>) {
     let m = y.len();
     let cols: Vec<(&[f64], f64)> = terms
         .into_iter()

@@ -45,7 +45,12 @@ impl Block {
     /// The block of the first `p` unknowns of `pf`'s order (`W[order[..p], order[..p]]`),
     /// whose factor is the leading block of `pf`'s: no factorisation. `None` under the same
     /// pivot test as [`Self::factorise`]; `parallel` as there.
-    pub(super) fn prefix(w: &Mat<f64>, pf: &Arc<PrefixFactor>, p: usize, parallel: bool) -> Option<Block> {
+    pub(super) fn prefix(
+        w: &Mat<f64>,
+        pf: &Arc<PrefixFactor>,
+        p: usize,
+        parallel: bool,
+    ) -> Option<Block> {
         let pivots: Vec<f64> = (0..p).map(|i| pf.c[(i, i)].powi(2)).collect();
         if !pivots_ok(&pivots) {
             return None;
@@ -68,8 +73,7 @@ impl Block {
 
     /// Factorises `W[unk, unk]`; `None` if it is singular or not numerically positive definite.
     ///
-    /// `parallel`: copy and factorise on rayon's threads (the factorisation on one while a
-    /// model-cache entry is written, [`crate::cache::writing`]). faer's blocked Cholesky
+    /// `parallel`: copy and factorise on rayon's threads. faer's blocked Cholesky
     /// splits the products of its updates by their output, never a sum, so the factor has the
     /// same bits on any number of threads
     /// (`the_block_factor_has_the_same_bits_on_any_number_of_threads`).
@@ -86,7 +90,7 @@ impl Block {
             }
         };
         let mut l = crate::la::par::mat_filled(n, n, parallel, lower);
-        let par = if parallel && !crate::cache::writing() {
+        let par = if parallel {
             crate::la::par::factor_parallelism()
         } else {
             faer::Par::Seq

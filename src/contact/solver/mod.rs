@@ -43,8 +43,8 @@ mod system;
 #[cfg(test)]
 mod tests;
 
-pub use enforce::{Equation, NewtonRows, NewtonSystem, SlipLin, SpecialRow, WTerms};
 pub use block::{BlockRecord, BlockStore};
+pub use enforce::{Equation, NewtonRows, NewtonSystem, SlipLin, SpecialRow, WTerms};
 pub use factors::{LuCache, SolveTimings};
 pub use system::*;
 

@@ -2,14 +2,14 @@
 //! equations [`super::enforce`] writes, the augmented Lagrangian's outer update, and the
 //! safeguards against cycling and stalling.
 
+use super::enforce::NewtonSystem;
 use super::enforce::Trial;
 use super::factors::{LuCache, STRUCTURED_MIN};
-use crate::la::dense::solve_dense;
-use super::enforce::NewtonSystem;
 use super::system::{
     ContactError, ContactSystem, Iterate, Method, Options, PilotDrive, State, Status, StepOutcome,
 };
 use crate::friction::{FrictionLaw, History};
+use crate::la::dense::solve_dense;
 
 impl ContactSystem {
     /// Solves one load step from the committed state `prev`, with the condensed load `w0`

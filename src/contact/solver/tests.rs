@@ -22,7 +22,6 @@ fn the_leading_set_of_a_prefix_factor_holds_the_unknowns_with_few_others() {
     assert_eq!(leading_set(&pf, &first(PREFIX_MIN)), Some(PREFIX_MIN));
 }
 
-
 /// A block factorised on rayon's threads has the bits of the sequential factorisation, in
 /// pools of 2, 3 and 4 threads, at sizes that cross faer's blocking thresholds, with a
 /// subset of the unknowns (so the copy gathers rows and columns) and the rows outside.
