@@ -8,7 +8,6 @@ use super::format::{CHUNK, FORMAT, HEADER_AREA, MAGIC, MAX_SECTIONS, SectionInfo
 use super::hash::{Xxh64, xxh64};
 use super::key::Key;
 use super::reader::{MappedWords, Pages};
-use super::store::Store;
 use super::words::Words;
 
 /// A cache entry: tagged sections, written and read in this order.
@@ -151,16 +150,22 @@ impl Draft {
     /// kills the process (`SIGBUS`): where space may still run out after `fallocate`
     /// (copy-on-write file systems such as btrfs and ZFS, network file systems), the values
     /// go to memory.
-    pub fn create(store: &Store, key: Key, len: usize) -> Option<Draft> {
+    /// In the directory `dir`, for the entry at `path` (`max_bytes`: the cache's size cap).
+    pub(super) fn create(
+        dir: &Path,
+        path: &Path,
+        max_bytes: u64,
+        len: usize,
+    ) -> Option<Draft> {
         let bytes = HEADER_AREA.checked_add(8 * len as u64)?;
         if !cfg!(all(target_os = "linux", target_endian = "little"))
             || !in_place_allowed()
-            || bytes > store.max_bytes
+            || bytes > max_bytes
         {
             return None;
         }
-        std::fs::create_dir_all(&store.dir).ok()?;
-        let tmp = temporary_path(&store.path(key));
+        std::fs::create_dir_all(dir).ok()?;
+        let tmp = temporary_path(path);
         let file = std::fs::OpenOptions::new()
             .read(true)
             .write(true)

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::entry::{Entry, write_entry};
+use super::entry::{Draft, Entry, write_entry};
 use super::format::DEFAULT_MAX_BYTES;
 use super::key::Key;
 use super::reader::{Open, Reader};
@@ -155,6 +155,12 @@ impl Store {
             max_bytes,
             warn,
         })
+    }
+
+    /// A new entry's draft file for `key` with room for `len` factor values, mapped for the
+    /// factorisation to compute them in ([`Draft`]); `None` where that is not done.
+    pub fn draft(&self, key: Key, len: usize) -> Option<Draft> {
+        Draft::create(&self.dir, &self.path(key), self.max_bytes, len)
     }
 
     /// The file of the entry with `key`.

@@ -786,7 +786,7 @@ fn factorise(
             // (none where that cannot be done safely: the values go to memory, and the entry's
             // writer copies them as for a model without contact).
             let draft = entry_to.and_then(|(store, key)| {
-                crate::cache::Draft::create(store, key, symbolic.len_val())
+                store.draft(key, symbolic.len_val())
             });
             let (draft, dest) = match draft {
                 Some(d) => (
