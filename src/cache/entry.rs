@@ -151,12 +151,7 @@ impl Draft {
     /// (copy-on-write file systems such as btrfs and ZFS, network file systems), the values
     /// go to memory.
     /// In the directory `dir`, for the entry at `path` (`max_bytes`: the cache's size cap).
-    pub(super) fn create(
-        dir: &Path,
-        path: &Path,
-        max_bytes: u64,
-        len: usize,
-    ) -> Option<Draft> {
+    pub(super) fn create(dir: &Path, path: &Path, max_bytes: u64, len: usize) -> Option<Draft> {
         let bytes = HEADER_AREA.checked_add(8 * len as u64)?;
         if !cfg!(all(target_os = "linux", target_endian = "little"))
             || !in_place_allowed()

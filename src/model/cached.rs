@@ -355,15 +355,10 @@ fn restore(
                 return Err(bad("order of the constraint rows"));
             }
             let packed = take_f(tag::PREFIX_C, m * (m + 1) / 2, "factor of W")?;
-            let mut c = faer::Mat::<f64>::zeros(m, m);
-            let mut at = 0;
-            for j in 0..m {
-                for i in j..m {
-                    c[(i, j)] = packed[at];
-                    at += 1;
-                }
-            }
-            Some(crate::contact::solver::PrefixFactor::new(c, order.clone()))
+            Some(crate::contact::solver::PrefixFactor::new(
+                unpack_lower(&packed, m),
+                order.clone(),
+            ))
         }
         _ => {
             if sec.contains_key(&tag::PREFIX_C) || sec.contains_key(&tag::PREFIX_ORDER) {
@@ -376,40 +371,11 @@ fn restore(
     if !is_permutation(&ordering, order_len) {
         return Err(bad("ordering"));
     }
-    // A contact model's factor is read with its stored layout (no analysis); a partial
-    // factorisation's analysis is redone from the stored ordering, while a second thread reads
-    // the factor values.
     let layout = layout.map(|mut l| {
         l.fwd = ordering.iter().copied().chain(n..n + m).collect();
         l
     });
-    let (analysis, analyse_s, values) = std::thread::scope(|s| {
-        let values = s.spawn(move || values.check());
-        let t = Instant::now();
-        let analysis = match layout {
-            Some(l) => l
-                .check(n, m)
-                .map(|()| Analysis::Layout(Arc::new(l)))
-                .map_err(|e| bad(&e)),
-            None => {
-                let (col_ptr, row_idx) = pattern.as_ref().expect("taken without contact");
-                PartialSymbolic::with_ordering(n, n_r, col_ptr, row_idx, &ordering)
-                    .map(Analysis::Partial)
-                    .map_err(|e| format!("unusable: {e}"))
-            }
-        };
-        let analyse_s = t.elapsed().as_secs_f64();
-        let values = values
-            .join()
-            .unwrap_or_else(|_| Err("cannot be read (the reader panicked)".into()));
-        (analysis, analyse_s, values)
-    });
-    let values = Arc::new(values?);
-    let chol = match analysis? {
-        Analysis::Layout(l) => SaddleFactor::from_layout(l, values, n, m).map(Factor::Saddle),
-        Analysis::Partial(s) => s.from_values(values).map(Factor::Partial),
-    }
-    .map_err(|e| format!("unusable: {e}"))?;
+    let (chol, analyse_s) = factor_of(values, layout, pattern.as_ref(), &ordering, (n, n_r, m))?;
     Ok(Restored {
         condensed: Condensed {
             n_i,
@@ -426,6 +392,63 @@ fn restore(
         analyse_s,
         report: Report::off(None),
     })
+}
+
+/// The lower triangle of an `m × m` matrix from its columns below the diagonal packed one
+/// after the other (the upper triangle zero).
+fn unpack_lower(packed: &[f64], m: usize) -> faer::Mat<f64> {
+    let mut c = faer::Mat::<f64>::zeros(m, m);
+    let mut at = 0;
+    for j in 0..m {
+        for i in j..m {
+            c[(i, j)] = packed[at];
+            at += 1;
+        }
+    }
+    c
+}
+
+/// The factor of a restored model and the seconds its analysis took: a contact model's
+/// factor is read with its stored `layout` (no analysis); a partial factorisation's analysis
+/// is redone from the stored `ordering` and stiffness `pattern`, while a second thread checks
+/// the mapped factor `values` against their hash. `(n, n_r, m)`: free DOFs, retained DOFs,
+/// constraint rows.
+fn factor_of(
+    values: cache::Unchecked,
+    layout: Option<crate::la::Supernodes>,
+    pattern: Option<&(Vec<usize>, Vec<usize>)>,
+    ordering: &[usize],
+    (n, n_r, m): (usize, usize, usize),
+) -> Result<(Factor, f64), String> {
+    let bad = |what: &str| format!("inconsistent ({what})");
+    let (analysis, analyse_s, values) = std::thread::scope(|s| {
+        let values = s.spawn(move || values.check());
+        let t = Instant::now();
+        let analysis = match layout {
+            Some(l) => l
+                .check(n, m)
+                .map(|()| Analysis::Layout(Arc::new(l)))
+                .map_err(|e| bad(&e)),
+            None => {
+                let (col_ptr, row_idx) = pattern.expect("taken without contact");
+                PartialSymbolic::with_ordering(n, n_r, col_ptr, row_idx, ordering)
+                    .map(Analysis::Partial)
+                    .map_err(|e| format!("unusable: {e}"))
+            }
+        };
+        let analyse_s = t.elapsed().as_secs_f64();
+        let values = values
+            .join()
+            .unwrap_or_else(|_| Err("cannot be read (the reader panicked)".into()));
+        (analysis, analyse_s, values)
+    });
+    let values = Arc::new(values?);
+    let chol = match analysis? {
+        Analysis::Layout(l) => SaddleFactor::from_layout(l, values, n, m).map(Factor::Saddle),
+        Analysis::Partial(s) => s.from_values(values).map(Factor::Partial),
+    }
+    .map_err(|e| format!("unusable: {e}"))?;
+    Ok((chol, analyse_s))
 }
 
 enum Analysis {

@@ -39,6 +39,7 @@ mod block;
 mod enforce;
 mod factors;
 mod newton;
+mod seeds;
 mod system;
 #[cfg(test)]
 mod tests;
@@ -52,7 +53,7 @@ pub use system::*;
 /// `None` where `STICKSLIP_CONTACT_SHORTCUTS=off` switched them off (reported in the summary
 /// and part of a restart state's identity: the two paths differ in the last digits).
 pub fn shortcuts_from() -> Option<usize> {
-    newton::shortcuts_allowed().then_some(newton::SHORTCUTS_FROM)
+    seeds::shortcuts_allowed().then_some(seeds::SHORTCUTS_FROM)
 }
 
 /// What a run's identity (a restart state's, a sweep part's) adds for the contact-solve path:

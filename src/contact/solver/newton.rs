@@ -5,6 +5,10 @@
 use super::enforce::NewtonSystem;
 use super::enforce::Trial;
 use super::factors::{LuCache, STRUCTURED_MIN};
+use super::seeds::{
+    Guard, NORMAL_FIRST_FROM, SHORTCUTS_FROM, hertz_set, predicted_start, seed_closest,
+    shortcuts_allowed,
+};
 use super::system::{
     ContactError, ContactSystem, Iterate, Method, Options, PilotDrive, State, Status, StepOutcome,
 };
@@ -284,23 +288,7 @@ impl ContactSystem {
         let mut w_mu: Option<Vec<f64>> = None;
         let mut guard = Guard::new(opt.verbose);
         for it in 1..=opt.max_iterations {
-            // `y` and, with the shortcuts, `W μ` itself (kept once the step converges).
-            let plus_w0 =
-                |p: &[f64]| -> Vec<f64> { w0.iter().zip(p).map(|(a, b)| a + b).collect() };
-            let recalled = match w_mu.take() {
-                Some(p) => Some(p),
-                None if !exact => cache
-                    .as_deref_mut()
-                    .and_then(|c| c.recall_w_mu(&mu, &self.w)),
-                None => None,
-            };
-            let y: Vec<f64> = match &recalled {
-                Some(p) => plus_w0(p),
-                None => match cache.as_deref_mut().and_then(|c| c.take_next_y(w0, &mu)) {
-                    Some(y) => y,
-                    None => self.y(w0, &mu),
-                },
-            };
+            let (y, recalled) = self.iterate_y(w0, &mu, w_mu.take(), exact, cache.as_deref_mut());
             // Sets from the current iterate (without a guess, the first iteration keeps the
             // committed sets).
             if solved || guess.is_some() {
@@ -313,38 +301,14 @@ impl ContactSystem {
                     fbar_n: &fbar_n,
                     fbar_t: &fbar_t,
                 };
-                let mut changes = self.update_sets(&trial, &y, &mut status, &mut sign);
-                // The first iteration from a guess: the stick nodes it predicts to slip (the
-                // slip fronts moving on) slip unless the update took them out of contact.
-                if !solved && let Some(g) = guess {
-                    for j in 0..ns {
-                        if g.status[j] == Status::Slip
-                            && prev.status[j] == Status::Stick
-                            && status[j] == Status::Stick
-                        {
-                            status[j] = Status::Slip;
-                            changes += 1;
-                        }
-                    }
-                }
-                // A force-driven pilot body that only the contact holds has no equilibrium with
-                // every node open (the system is singular): an iterate that opens them all
-                // overshot, so the closest nodes close again, as at the start of a step.
-                let forced = drive.iter().any(|d| matches!(d, PilotDrive::Force(_)));
-                if self.floating_pilot && forced && status.iter().all(|s| *s == Status::Open) {
-                    let gaps: Vec<f64> = (0..ns).map(|j| self.gap0[j] + y[j]).collect();
-                    seed_closest(&gaps, law.is_some(), &mut status);
-                    changes += 1;
-                }
-                if opt.verbose {
-                    let count = |st: Status| status.iter().filter(|s| **s == st).count();
-                    eprintln!(
-                        "    Newton iteration {it}: {} in contact ({} stick, {} slip), {changes} changed state, relative update {last_update:.2e}",
-                        ns - count(Status::Open),
-                        count(Status::Stick),
-                        count(Status::Slip)
-                    );
-                }
+                let changes = self.next_sets(
+                    &trial,
+                    &y,
+                    (&mut status, &mut sign),
+                    (guess, solved),
+                    drive,
+                    (it, last_update, opt.verbose),
+                );
                 // With the sets unchanged the last linear solve is the answer when the equations
                 // are linear in the sets (constant μ); a slip-dependent μ also needs a small update.
                 let linear = law.is_none_or(|l| matches!(l, FrictionLaw::Constant { .. }));
@@ -352,24 +316,7 @@ impl ContactSystem {
                     if opt.method != Method::AugmentedLagrangian
                         || self.penetration(&y, &status) <= opt.tolerance
                     {
-                        // With the shortcuts, `y` as the iteration tested it; else `W μ`
-                        // again: on the rows of the system `y` is what they impose, off the
-                        // product by the solve's error, which near a force-controlled peak
-                        // was enough to move the bracketed Q_max (L3, `tests/sweep.rs`).
-                        let y = match (exact, cache.as_deref_mut()) {
-                            // With it, `y` at the start the driver will most likely predict
-                            // for the next step (the increments are mostly equal), from the
-                            // same pass over `W`: the next step's first product, if it is
-                            // that start bit for bit.
-                            (true, Some(c)) => {
-                                let next = predicted_start(&mu, prev, ns, c.prediction());
-                                let (y, y_next) = self.y_pair(w0, &mu, &next);
-                                c.keep_next_y(w0, next, y_next);
-                                y
-                            }
-                            (true, None) => self.y(w0, &mu),
-                            (false, _) => y,
-                        };
+                        let y = self.converged_y(w0, &mu, prev, y, exact, cache.as_deref_mut());
                         if let (Some(c), Some(p)) = (cache.as_deref_mut(), recalled)
                             && !exact
                         {
@@ -440,6 +387,111 @@ impl ContactSystem {
             mu = new_mu;
         }
         unreachable!("the loop returns")
+    }
+
+    /// `y = w0 + W μ` of an iterate, and `W μ` itself where it was known without a product:
+    /// from the last solve (`w_mu`), recalled by the cache with the shortcuts (not `exact`), or
+    /// the product the cache computed ahead for this start.
+    fn iterate_y(
+        &self,
+        w0: &[f64],
+        mu: &[f64],
+        w_mu: Option<Vec<f64>>,
+        exact: bool,
+        mut cache: Option<&mut LuCache>,
+    ) -> (Vec<f64>, Option<Vec<f64>>) {
+        let recalled = match w_mu {
+            Some(p) => Some(p),
+            None if !exact => cache
+                .as_deref_mut()
+                .and_then(|c| c.recall_w_mu(mu, &self.w)),
+            None => None,
+        };
+        let y: Vec<f64> = match &recalled {
+            Some(p) => w0.iter().zip(p).map(|(a, b)| a + b).collect(),
+            None => match cache.and_then(|c| c.take_next_y(w0, mu)) {
+                Some(y) => y,
+                None => self.y(w0, mu),
+            },
+        };
+        (y, recalled)
+    }
+
+    /// The sets of the next iteration from the iterate `trial` with `y`: the update of
+    /// [`Self::update_sets`]; on the first iteration from a `guess`, the stick nodes it predicts
+    /// to slip slip; a force-driven pilot body that only the contact holds gets its closest
+    /// nodes back when every node opened. Returns the number of nodes whose state changed.
+    fn next_sets(
+        &self,
+        trial: &Trial<'_>,
+        y: &[f64],
+        (status, sign): (&mut [Status], &mut [f64]),
+        (guess, solved): (Option<&State>, bool),
+        drive: [PilotDrive; 2],
+        (it, last_update, verbose): (usize, f64, bool),
+    ) -> usize {
+        let (ns, prev, law) = (self.ns, trial.prev, trial.law);
+        let mut changes = self.update_sets(trial, y, status, sign);
+        // The first iteration from a guess: the stick nodes it predicts to slip (the
+        // slip fronts moving on) slip unless the update took them out of contact.
+        if !solved && let Some(g) = guess {
+            for j in 0..ns {
+                if g.status[j] == Status::Slip
+                    && prev.status[j] == Status::Stick
+                    && status[j] == Status::Stick
+                {
+                    status[j] = Status::Slip;
+                    changes += 1;
+                }
+            }
+        }
+        // A force-driven pilot body that only the contact holds has no equilibrium with
+        // every node open (the system is singular): an iterate that opens them all
+        // overshot, so the closest nodes close again, as at the start of a step.
+        let forced = drive.iter().any(|d| matches!(d, PilotDrive::Force(_)));
+        if self.floating_pilot && forced && status.iter().all(|s| *s == Status::Open) {
+            let gaps: Vec<f64> = (0..ns).map(|j| self.gap0[j] + y[j]).collect();
+            seed_closest(&gaps, law.is_some(), status);
+            changes += 1;
+        }
+        if verbose {
+            let count = |st: Status| status.iter().filter(|s| **s == st).count();
+            eprintln!(
+                "    Newton iteration {it}: {} in contact ({} stick, {} slip), {changes} changed state, relative update {last_update:.2e}",
+                ns - count(Status::Open),
+                count(Status::Stick),
+                count(Status::Slip)
+            );
+        }
+        changes
+    }
+
+    /// `y` of a converged iterate as the step reports it: with the shortcuts, `y` as the
+    /// iteration tested it; else `W μ` again (on the rows of the system `y` is what they
+    /// impose, off them the product differs by the solve's error, which near a
+    /// force-controlled peak was enough to move the bracketed Q_max: L3, `tests/sweep.rs`).
+    /// With a cache, the same pass over `W` also gives `y` at the start the driver will most
+    /// likely predict for the next step (the increments are mostly equal), kept as that
+    /// step's first product if it is that start bit for bit.
+    fn converged_y(
+        &self,
+        w0: &[f64],
+        mu: &[f64],
+        prev: &State,
+        y: Vec<f64>,
+        exact: bool,
+        cache: Option<&mut LuCache>,
+    ) -> Vec<f64> {
+        match (exact, cache) {
+            (true, Some(c)) => {
+                let next = predicted_start(mu, prev, self.ns, c.prediction());
+                let (y, y_next) = self.y_pair(w0, mu, &next);
+                c.keep_next_y(w0, next, y_next);
+                y
+            }
+            (true, None) => self.y(w0, mu),
+            (false, _) => y,
+        }
     }
 
     /// Solves the linear system of one iteration: the structured solve from the cached factor
@@ -587,152 +639,6 @@ impl ContactSystem {
             state: st,
             iterations,
             last_update,
-        }
-    }
-}
-
-/// The forces the driver predicts ([`super::predicted_forces`]) for the start of the step after
-/// one that converged at `mu` from `prev`, in μ order, taking the next ratio of the increments
-/// to be this step's, or 1 (equal increments).
-fn predicted_start(mu: &[f64], prev: &State, ns: usize, t: Option<f64>) -> Vec<f64> {
-    let (f_n, rest) = mu.split_at(ns);
-    let (f_t, z) = rest.split_at(ns);
-    super::system::predicted_forces(
-        [f_n, f_t, z],
-        [&prev.f_n, &prev.f_t, &prev.z],
-        t.unwrap_or(1.0),
-    )
-    .concat()
-}
-
-/// Contact unknowns (`2 ns` plus anchors) from which the structured solve takes its shortcuts
-/// (see [`ContactSystem::solve_step`]): L5 up on the VM272 ladder (1 018 unknowns), not L4
-/// (514). The coarse meshes are where the shortcuts' lost digit was seen to move a
-/// force-controlled peak: on L3 and L4 the bracketing of Q_max ended up to 0.3 % early with
-/// them (`tests/sweep.rs`, `tests/onset.rs`). At L5 and L7 they moved Q_max by at most 2.5e-4
-/// of it (Fig. 2's case loaded past its peak, ramp laws f_s = 0.15 and 0.2, Λ = 0.025), and
-/// by 8e-12 to 3.5e-5 in five such runs on L5 (`tests/shortcuts.rs`; the bracket of a peak
-/// also moves with the load steps a run takes near it). At L5 they take 40 % off the 50-law
-/// sweep's rows (`STICKSLIP_CONTACT_SHORTCUTS=off` against on, docs/benchmarks.md).
-pub(super) const SHORTCUTS_FROM: usize = 768;
-
-/// Whether the structured solve may take its shortcuts at all: `STICKSLIP_CONTACT_SHORTCUTS=off`
-/// solves every iteration directly at every size (read once), for a peak to be bracketed
-/// without the shortcuts' lost digit and for comparing the two paths (`tests/shortcuts.rs`).
-pub(super) fn shortcuts_allowed() -> bool {
-    static ALLOWED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *ALLOWED.get_or_init(|| std::env::var("STICKSLIP_CONTACT_SHORTCUTS").as_deref() != Ok("off"))
-}
-
-/// Contact unknowns from which a first contact starts from the frictionless contact set
-/// ([`ContactSystem::normal_first`]). Below (Fig. 2's zone on L3 has 208), a block
-/// factorisation takes well under a millisecond and the iteration stays as it was: on L3 the
-/// start moved the force-controlled Q_max of the f_s = 0.2 ramp law (`tests/sweep.rs`, a
-/// peak on the jagged Q–slip curve of a mesh that does not resolve s0) from −0.47 % to
-/// −0.77 % of JKR, the Newton iteration at the peak failing one bisection earlier from
-/// states equal to 1e-12.
-pub(super) const NORMAL_FIRST_FROM: usize = 512;
-
-/// The contact set of a frictionless line contact between bodies whose initial gap is a
-/// parabola, `g0 = g_min + t² / (2R)`, pressed together by the normal force `p` (per unit
-/// length): Hertz's semi-width `a = (4 p R / (π E*))^½` puts its edge at the initial gap
-/// `g_min + a² / (2R) = g_min + 2 p / (π E*)`, whatever the radius. The nodes within that gap
-/// (in contact, frictionless: [`Status::Slip`]), or `None` when fewer than three are (a load
-/// too small to tell, or none). Where the gap is not such a parabola this is only a start the
-/// iteration corrects; where it is (the paper's cylinders on L5: 409 nodes from it against 409
-/// at convergence) the frictionless solve takes two iterations instead of eleven (Fig. 2's
-/// first step five instead of fourteen), each set a leading set of the prefix factor (the
-/// nodes by increasing initial gap).
-fn hertz_set(gap0: &[f64], p: f64, e_star: f64) -> Option<Vec<Status>> {
-    let g_min = gap0.iter().copied().fold(f64::INFINITY, f64::min);
-    let edge = g_min + 2.0 * p / (std::f64::consts::PI * e_star);
-    let status: Vec<Status> = gap0
-        .iter()
-        .map(|&g| {
-            if g <= edge {
-                Status::Slip
-            } else {
-                Status::Open
-            }
-        })
-        .collect();
-    let closed = status.iter().filter(|s| **s == Status::Slip).count();
-    (p.is_finite() && e_star > 0.0 && closed >= 3).then_some(status)
-}
-
-/// Puts the three nodes of smallest gap in contact (stick with friction, else slip): three
-/// nodes span both sides of the closest point, which holds a body the pilot pushes and stops a
-/// frictionless rigid sliding mode.
-fn seed_closest(gaps: &[f64], friction: bool, status: &mut [Status]) {
-    let mut order: Vec<usize> = (0..gaps.len()).collect();
-    order.sort_by(|&a, &b| gaps[a].total_cmp(&gaps[b]));
-    for &j in order.iter().take(3) {
-        status[j] = if friction {
-            Status::Stick
-        } else {
-            Status::Slip
-        };
-    }
-}
-
-/// The safeguards of the Newton iteration of one step.
-struct Guard {
-    verbose: bool,
-    /// Iterations in a row with the sets settled and the update small but above the
-    /// tolerance, and whether the structured solve has been given up for this step: its
-    /// accuracy (a Woodbury update of a cached factor, `W μ` taken from the equations) can
-    /// floor the update near 1e-8 on ill-conditioned systems (a steep μ′ with many slip
-    /// nodes), where the dense LU still converges.
-    stalled: usize,
-    dense_only: bool,
-    /// Iterations in a row with the sets fixed and the update not contracting (Newton
-    /// cycling across a kink of μ(u), e.g. the end of a ramp, where μ′ jumps), and the
-    /// relaxation applied to the update once that is detected.
-    cycling: usize,
-    relax: f64,
-    prev_update: f64,
-}
-
-impl Guard {
-    fn new(verbose: bool) -> Self {
-        Guard {
-            verbose,
-            stalled: 0,
-            dense_only: false,
-            cycling: 0,
-            relax: 1.0,
-            prev_update: f64::INFINITY,
-        }
-    }
-
-    /// Records an iteration that did not converge.
-    fn observe(&mut self, changes: usize, update: f64) {
-        if changes == 0 && update > 1e-5 && update >= 0.5 * self.prev_update {
-            self.cycling += 1;
-            if self.cycling >= 3 && self.relax == 1.0 {
-                self.relax = 0.5;
-                if self.verbose {
-                    eprintln!(
-                        "    the update does not contract ({update:.2e}): halving the steps from here on"
-                    );
-                }
-            }
-        } else {
-            self.cycling = 0;
-        }
-        self.prev_update = update;
-        if changes == 0 && update < 1e-5 {
-            self.stalled += 1;
-            if self.stalled >= 2 && !self.dense_only {
-                self.dense_only = true;
-                if self.verbose {
-                    eprintln!(
-                        "    the update stalls at {update:.2e}: solving the assembled system from here on"
-                    );
-                }
-            }
-        } else {
-            self.stalled = 0;
         }
     }
 }

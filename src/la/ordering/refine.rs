@@ -129,6 +129,20 @@ impl Workspace {
     }
 }
 
+/// The gains of moving separator vertex `v` of `g` to side A and to side B: its weight less
+/// the weight of its neighbours on the other side (which enter the separator).
+fn separator_gains(g: &Graph, side: &[u8], v: u32) -> [i64; 2] {
+    let w = |v: u32| g.vw[v as usize] as i64;
+    let mut pull = [0i64; 2];
+    for &u in g.nbrs(v as usize) {
+        let s = side[u as usize];
+        if s != SEP {
+            pull[s as usize] += w(u);
+        }
+    }
+    [w(v) - pull[1], w(v) - pull[0]]
+}
+
 /// Fiduccia–Mattheyses refinement of the vertex separator `side` of `g` (two-sided: a
 /// separator vertex moves into either side, its neighbours on the other side enter the
 /// separator), keeping the best state of each pass. `pw` are the weights of the sides and
@@ -144,18 +158,7 @@ pub(super) fn refine(
     ws: &mut Workspace,
 ) -> Score {
     let w = |v: u32| g.vw[v as usize] as i64;
-    // Gain of moving separator vertex v to side t: its weight less the weight of its
-    // neighbours on the other side (which enter the separator).
-    let gains = |side: &[u8], v: u32| {
-        let mut pull = [0i64; 2];
-        for &u in g.nbrs(v as usize) {
-            let s = side[u as usize];
-            if s != SEP {
-                pull[s as usize] += w(u);
-            }
-        }
-        [w(v) - pull[1], w(v) - pull[0]]
-    };
+    let gains = |side: &[u8], v: u32| separator_gains(g, side, v);
     let Workspace {
         heaps,
         gain,
