@@ -42,9 +42,13 @@ pub fn mark(label: impl std::fmt::Display) {
 fn minor_faults() -> libc::c_long {
     #[cfg(unix)]
     {
-        // SAFETY: getrusage writes the struct it is given.
-        let mut r: libc::rusage = unsafe { std::mem::zeroed() };
-        if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut r) } == 0 {
+        // SAFETY: `rusage` is plain data (all zeros is a value of it); getrusage writes the
+        // struct it is given.
+        let (rc, r) = unsafe {
+            let mut r: libc::rusage = std::mem::zeroed();
+            (libc::getrusage(libc::RUSAGE_SELF, &mut r), r)
+        };
+        if rc == 0 {
             return r.ru_minflt;
         }
     }
@@ -55,9 +59,12 @@ fn minor_faults() -> libc::c_long {
 fn thread_cpu_ms() -> f64 {
     #[cfg(target_os = "linux")]
     {
-        // SAFETY: getrusage writes the struct it is given.
-        let mut r: libc::rusage = unsafe { std::mem::zeroed() };
-        if unsafe { libc::getrusage(libc::RUSAGE_THREAD, &mut r) } == 0 {
+        // SAFETY: as in `minor_faults`.
+        let (rc, r) = unsafe {
+            let mut r: libc::rusage = std::mem::zeroed();
+            (libc::getrusage(libc::RUSAGE_THREAD, &mut r), r)
+        };
+        if rc == 0 {
             let ms = |t: libc::timeval| t.tv_sec as f64 * 1e3 + t.tv_usec as f64 * 1e-3;
             return ms(r.ru_utime) + ms(r.ru_stime);
         }

@@ -53,18 +53,13 @@ impl WritableSection {
     /// The floats, to be written.
     pub fn as_mut_f64(&mut self) -> &mut [f64] {
         assert!(
-            self.offset + 8 * self.len <= self.map.len(),
-            "a section within its mapping"
+            cfg!(target_endian = "little"),
+            "mapped floats are little-endian words"
         );
-        // SAFETY: in bounds (checked above).
-        let p = unsafe { self.map.as_mut_ptr().add(self.offset) };
-        assert!(
-            cfg!(target_endian = "little") && (p as usize).is_multiple_of(8),
-            "mapped floats must be aligned little-endian words"
-        );
-        // SAFETY: aligned, in bounds, little-endian f64 words (checked above); any bit pattern
-        // is a valid f64; the mapping lives as long as `self`, borrowed mutably here.
-        unsafe { std::slice::from_raw_parts_mut(p.cast::<f64>(), self.len) }
+        let bytes = &mut self.map[self.offset..self.offset + 8 * self.len];
+        // Every section starts at a multiple of 8 bytes from the page-aligned start of the file
+        // (checked by the cast).
+        bytemuck::try_cast_slice_mut(bytes).expect("mapped floats are aligned")
     }
 
     /// Faults the section's pages in for writing, in parts on rayon's threads
@@ -209,9 +204,13 @@ pub(super) fn reserves_blocks(file: &std::fs::File) -> bool {
         const EXT: i64 = 0xEF53;
         const XFS: i64 = 0x5846_5342;
         const TMPFS: i64 = 0x0102_1994;
-        // SAFETY: `statfs` is plain data, filled in by the call on a valid descriptor.
-        let mut st: libc::statfs = unsafe { std::mem::zeroed() };
-        if unsafe { libc::fstatfs(file.as_raw_fd(), &mut st) } != 0 {
+        // SAFETY: `statfs` is plain data (all zeros is a value of it), filled in by the call
+        // on a valid descriptor that `file` keeps open.
+        let (rc, st) = unsafe {
+            let mut st: libc::statfs = std::mem::zeroed();
+            (libc::fstatfs(file.as_raw_fd(), &mut st), st)
+        };
+        if rc != 0 {
             return false;
         }
         // `f_type` is an `i64` on most targets, narrower on some.
