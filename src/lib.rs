@@ -26,6 +26,7 @@ pub mod ordering;
 pub mod output;
 pub mod probe;
 pub mod quadrature;
+pub mod record;
 pub mod report;
 pub mod restart;
 pub mod run;

@@ -50,7 +50,7 @@ pub struct SavedRun {
 /// energy row.
 #[derive(Serialize, Deserialize)]
 pub struct JournalLine {
-    pub record: crate::report::StepRecord,
+    pub record: crate::record::StepRecord,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub energy: Option<crate::energy::EnergyRow>,
     /// Whether the step's files were written (its `.pvd` entries).

@@ -369,10 +369,11 @@ pub fn run_model(
             // recovered, on a thread of its own: it fills the time the two output threads wait
             // for the device's writes and for each other at the end, instead of following them.
             let mut sim = sim;
+            let mut equilibrium = None;
             match last_u {
                 Some((step, rx)) if sim.last_u.is_none() && sim.records.len() == step => {
                     let (sim_ref, model_ref) = (&sim, &model);
-                    let (u, equilibrium) = std::thread::scope(|s| {
+                    let (u, checked) = std::thread::scope(|s| {
                         let checking = std::thread::Builder::new()
                             .name("stickslip-check".into())
                             .spawn_scoped(s, move || {
@@ -398,7 +399,7 @@ pub fn run_model(
                             .unzip()
                     });
                     sim.last_u = u;
-                    sim.equilibrium = equilibrium;
+                    equilibrium = checked;
                 }
                 _ => {
                     let _ = writer.help();
@@ -417,7 +418,7 @@ pub fn run_model(
             let solve_s = sim.solve_s;
             let bracket_attempts = sim.bracket_attempts;
             let history = history_csv(&sim.records);
-            let summarised = summarise(&model, case, case_path, out_dir, sim);
+            let summarised = summarise(&model, case, case_path, out_dir, sim, equilibrium);
             crate::trace::mark("summarised");
             let (t_write, t_wait) = writer.finish()?;
             crate::trace::mark("writer done");

@@ -12,8 +12,9 @@ use crate::friction::FrictionLaw;
 use crate::model::Model;
 use crate::model::StepLoad;
 use crate::model::step::PilotState;
-use crate::report::StepRecord;
+use crate::record::StepRecord;
 use std::time::Instant;
+pub use unheld::DISPLACEMENT_ERROR;
 use unheld::{unheld_after, unheld_before};
 
 /// Halvings of a stage's nominal increment before a step is given up: no increment is smaller
@@ -96,9 +97,6 @@ pub struct Simulation {
     pub last_u: Option<Vec<f64>>,
     pub last_state: Option<State>,
     pub last_scale: f64,
-    /// The summary's equilibrium check of the last step, when the caller computed it already
-    /// (a run computes it while its last steps are written).
-    pub equilibrium: Option<crate::checks::Check>,
 }
 
 /// Steps through the stages of a case on a built model with friction law `law` (overriding
@@ -222,7 +220,6 @@ pub fn simulate_with(
         last_state: if d.records.is_empty() { None } else { d.cstate },
         last_scale: d.scale,
         records: d.records,
-        equilibrium: None,
     })
 }
 

@@ -6,6 +6,13 @@ use crate::contact::solver::{State, Status};
 use crate::error::StepError;
 use crate::model::Model;
 
+/// Displacement over model size above which a body ran away: no linear-elastic answer of a
+/// held body moves ten times its own size, while an unheld one, kept only by round-off, moves
+/// 1e9 times. A converged step of a pilot that moved farther is a failed step
+/// ([`unheld_after`]); the self-check `max_displacement` of a finished run calls a field that
+/// did an error.
+pub const DISPLACEMENT_ERROR: f64 = 10.0;
+
 /// The pilot's drive along the direction that separates its (otherwise unheld) body from the
 /// contact: the dominant component of that direction, and its force if force-controlled. A
 /// force at the round-off of zero (below 1e-12 of the largest modulus times the model's
@@ -38,7 +45,7 @@ pub(super) fn unheld_before(model: &Model, case: &Case, ctl: &[Control; 2]) -> O
 
 /// A converged step whose answer means nothing: a force-controlled pilot body with no node in
 /// contact and no support (held only by the solver's grounding spring), or a pilot that ran
-/// away (see [`crate::checks::DISPLACEMENT_ERROR`]).
+/// away ([`DISPLACEMENT_ERROR`]).
 pub(super) fn unheld_after(
     model: &Model,
     case: &Case,
@@ -47,7 +54,7 @@ pub(super) fn unheld_after(
 ) -> Option<StepError> {
     let size = model.scales().0;
     let u = st.pilot_u[0].hypot(st.pilot_u[1]);
-    let limit = crate::checks::DISPLACEMENT_ERROR;
+    let limit = DISPLACEMENT_ERROR;
     if model.dofs.pilot.is_some() && (u.is_nan() || u > limit * size) {
         return Some(StepError::RanAway {
             moved: u,
