@@ -11,8 +11,8 @@ use crate::contact::solver::{self, ContactError, State, Status};
 use crate::error::{RunError, StepError, StepFailure};
 use crate::friction::FrictionLaw;
 use crate::model::Model;
-use crate::model::StepLoad;
 use crate::model::step::PilotState;
+use crate::model::step::StepLoad;
 use crate::record::StepRecord;
 use std::time::Instant;
 
