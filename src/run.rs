@@ -9,7 +9,8 @@ pub use crate::driver::{
 use crate::energy::EnergyMeter;
 pub use crate::error::RunError;
 use crate::model::Model;
-use crate::output::series::{Background, Series, StepOutput, write_file};
+use crate::output::background::Background;
+use crate::output::series::{Series, StepOutput, write_file};
 use crate::report::{Summary, end_summary, history_csv, print_warnings, summarise};
 use crate::restart::{self, SavedRun};
 use std::path::{Path, PathBuf};
