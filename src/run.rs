@@ -10,7 +10,7 @@ use crate::energy::EnergyMeter;
 pub use crate::error::RunError;
 use crate::model::Model;
 use crate::output::background::Background;
-use crate::output::series::{Series, StepOutput, write_file};
+use crate::output::series::{Series, StateFile, StepOutput, write_file};
 use crate::report::{Summary, end_summary, history_csv, print_warnings, summarise};
 use crate::restart::{self, SavedRun};
 use std::path::{Path, PathBuf};
@@ -475,15 +475,17 @@ impl StepSink<'_> {
             u: ev.u.cloned(),
             contact: ev.contact.cloned(),
             // The state to resume from, written after the step's files.
-            state: ev.checkpoint.map(|c| SavedRun {
-                format: restart::FORMAT,
-                id: self.id.to_string(),
-                candidate_gap: self.candidate_gap,
-                checkpoint: c.clone(),
-                steps: ev.step,
-                pvd: Vec::new(),
-                journal: String::new(),
-                energy: self.energy.as_ref().map(EnergyMeter::saved),
+            state: ev.checkpoint.map(|c| -> Box<dyn StateFile> {
+                Box::new(SavedRun {
+                    format: restart::FORMAT,
+                    id: self.id.to_string(),
+                    candidate_gap: self.candidate_gap,
+                    checkpoint: c.clone(),
+                    steps: ev.step,
+                    pvd: Vec::new(),
+                    journal: String::new(),
+                    energy: self.energy.as_ref().map(EnergyMeter::saved),
+                })
             }),
         };
         if picked {

@@ -3,10 +3,10 @@
 //! the DOF numbering, the grounded DOFs of the bodies that only the pilot or the contact
 //! holds, the contact's constraint rows and the nodal forces of the tractions ([`prepare`]).
 
-use super::error::ModelError;
 use crate::case::{Case, TractionKind};
 use crate::dofs::{DofMap, SupportSpec};
 use crate::elasticity::Material;
+use crate::error::ModelError;
 use crate::loads::{EdgeOrientation, Traction};
 use crate::mesh::{Mesh, check};
 use std::time::Instant;

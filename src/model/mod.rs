@@ -6,22 +6,20 @@
 //! | this file | [`Model`] and its build: the parts, the linear algebra (built, or restored from the model cache), the contact loads |
 //! | `bodies` | what a case gives on its mesh before any matrix: elements, boundaries, contact pair, DOFs, grounding, tractions |
 //! | `cached` | the model's linear algebra in the model cache |
-//! | `error` | [`ModelError`] |
 //! | [`step`] | one load step on the condensed model |
 //! | `elements` | solution fields read element by element: displacements, nodal stresses |
 
 mod bodies;
 mod cached;
 mod elements;
-mod error;
 pub mod step;
-pub use error::ModelError;
 
 use crate::assembly::{self, UpperCsc};
 use crate::case::Case;
 use crate::condense::Condensed;
 use crate::dofs::DofMap;
 use crate::elasticity::Material;
+use crate::error::ModelError;
 use crate::linsolve::{PartialSymbolic, SaddleSymbolic};
 use crate::mesh::Mesh;
 use bodies::Prepared;

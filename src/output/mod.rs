@@ -56,6 +56,11 @@ pub fn contact_file_name(stem: &str, step: usize) -> String {
     format!("{stem}_contact_{step:04}.vtu")
 }
 
+/// The file name of the restart state of `step` ([`series::StateFile`]).
+pub fn state_file_name(step: usize) -> String {
+    format!("state_{step:04}.json")
+}
+
 /// The journal of step records a run writes beside its restart states (see
 /// [`crate::restart`]).
 pub const JOURNAL: &str = "steps.jsonl";

@@ -10,11 +10,10 @@ use super::fields::{
     contact_csv, contact_vtu,
 };
 use super::vtu::Field;
-use super::{PvdEntry, bodies_file_name, contact_file_name, pvd};
+use super::{PvdEntry, bodies_file_name, contact_file_name, pvd, state_file_name};
 use crate::contact::solver::State;
 use crate::error::RunError;
 use crate::model::Model;
-use crate::restart::{self, SavedRun};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::SyncSender;
 use std::sync::{Arc, OnceLock};
@@ -56,6 +55,13 @@ pub fn write_contact_csv(
     )
 }
 
+/// A step's restart state as the series writes it, after the step's files
+/// ([`super::state_file_name`]): its bytes are made when the step is written, on the thread
+/// that writes it.
+pub trait StateFile: Send + Sync {
+    fn bytes(&self) -> Vec<u8>;
+}
+
 /// One converged step to write, with its own copy of what it needs.
 pub struct StepOutput {
     pub step: usize,
@@ -65,9 +71,8 @@ pub struct StepOutput {
     pub u: Option<Vec<f64>>,
     /// The contact state (runs with contact: the bodies' field is recovered from it).
     pub contact: Option<State>,
-    /// The restart state to write after the step's files; its `.pvd` entries are filled in
-    /// with those written so far.
-    pub state: Option<SavedRun>,
+    /// The restart state to write after the step's files.
+    pub state: Option<Box<dyn StateFile>>,
     /// Where to send the step's displacement field once recovered (the driver's checks of the
     /// last step use it rather than solving again).
     pub reply: Option<SyncSender<Vec<f64>>>,
@@ -384,12 +389,7 @@ impl<'a> Series<'a> {
         ));
         // The state to resume from, after the step's files.
         if let Some(saved) = s.state {
-            files.push((
-                dir.join(restart::state_name(step)),
-                serde_json::to_string(&saved)
-                    .expect("serialisable")
-                    .into_bytes(),
-            ));
+            files.push((dir.join(state_file_name(step)), saved.bytes()));
         }
         self.put_all(&files)
     }

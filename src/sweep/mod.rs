@@ -140,7 +140,7 @@ pub fn run(case_path: &Path, sweep_path: &Path, opts: &SweepOptions) -> Result<(
         .iter()
         .map(|f| f.resolve(e_star).map(|l| (l, f.history)))
         .collect::<Result<Vec<_>, _>>()
-        .map_err(crate::model::ModelError::Friction)?;
+        .map_err(crate::error::ModelError::Friction)?;
     if laws.is_empty() {
         let history = case.contact.as_ref().and_then(|c| c.friction.as_ref());
         laws.push((
