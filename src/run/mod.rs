@@ -1,6 +1,15 @@
 //! The run driver: stages and load steps (with cutbacks and the bracketing of Q_max), one
 //! solve per step on the condensed model ([`crate::model::step`]), the output of every step
 //! ([`crate::output::fields`]) and the report at the end ([`crate::report`]).
+//!
+//! | module | content |
+//! |---|---|
+//! | this file | a run of a case file: the model (rebuilt with a wider contact zone when the contact reaches its rim), the output begun, the steps, the summary |
+//! | `steps` | what each converged step goes through: progress, energy, journal, the writer; the last step's check |
+//! | `progress` | the progress bar or lines |
+
+mod progress;
+mod steps;
 
 use crate::case::Case;
 pub use crate::driver::{
@@ -10,11 +19,12 @@ use crate::energy::EnergyMeter;
 pub use crate::error::RunError;
 use crate::model::Model;
 use crate::output::background::Background;
-use crate::output::series::{Series, StateFile, StepOutput, write_file};
+use crate::output::series::{Series, write_file};
 use crate::report::{Summary, end_summary, history_csv, print_warnings, summarise};
 use crate::restart::{self, SavedRun};
+use progress::Progress;
 use std::path::{Path, PathBuf};
-use std::sync::mpsc::{Receiver, sync_channel};
+use steps::{StepSink, check_last_step};
 
 /// Options of a run from the command line.
 #[derive(Clone, Debug, Default)]
@@ -167,17 +177,6 @@ fn written_steps(case: &Case) -> u64 {
 /// The output a run of `case` on `model` is projected to write, restart states aside.
 fn projected_output_bytes(case: &Case, model: &Model) -> u64 {
     written_steps(case) * step_bytes(model)
-}
-
-/// How many of the case's nominal load steps the load path has covered at `time` (stage index
-/// plus the fraction of that stage).
-fn nominal_steps_done(case: &Case, time: f64) -> f64 {
-    let mut done = 0.0;
-    for (i, st) in case.stages.iter().enumerate() {
-        let frac = (time - i as f64).clamp(0.0, 1.0);
-        done += frac * st.steps as f64;
-    }
-    done
 }
 
 /// Steps through the stages of a built model, writing output to `out_dir`; `id` is the run's
@@ -408,170 +407,6 @@ type BegunOutput<'a> = (
     Restart,
 );
 
-/// What each converged step goes through on the driver's thread: the progress, the energy
-/// balance, the journal line, and the writer (or the contact CSV alone when no `.vtu` is
-/// written).
-struct StepSink<'a> {
-    case: &'a Case,
-    model: &'a Model,
-    out_dir: &'a Path,
-    /// The run's identity, and the contact's candidate gap, which its restart states carry.
-    id: &'a str,
-    candidate_gap: Option<f64>,
-    progress: &'a Progress<'a>,
-    energy: &'a mut Option<EnergyMeter>,
-    journal: Option<std::fs::File>,
-    journal_path: &'a Path,
-    /// The last converged step not yet written (`output.every` > 1).
-    unwritten: Option<StepOutput>,
-    /// The last step and where its recovered displacements come from (runs with contact: the
-    /// writer recovers them with the steps it writes and sends them back).
-    last_u: Option<(usize, Receiver<Vec<f64>>)>,
-}
-
-impl StepSink<'_> {
-    /// Takes the converged step `ev`: its progress, energy and journal line, and its output,
-    /// handed to `writer` when it is written.
-    fn step(&mut self, ev: &StepEvent, writer: &mut Background<'_, '_>) -> Result<(), RunError> {
-        let case = self.case;
-        self.progress.step(ev);
-        if let Some(m) = self.energy.as_mut() {
-            m.step(self.model, ev);
-        }
-        // Written: the nominal steps `output.every` picks and the last one, and with
-        // `output.substeps` the sub-steps of cutbacks between them too.
-        let picked = ev.last
-            || match ev.nominal {
-                Some(k) => k.is_multiple_of(case.output.every),
-                None => case.output.substeps,
-            };
-        self.journal_line(ev, picked)?;
-        if !case.output.vtu {
-            if picked
-                && case.output.contact_csv
-                && let Some(st) = ev.contact
-            {
-                crate::output::series::write_contact_csv(self.model, self.out_dir, ev.step, st)?;
-            }
-            return Ok(());
-        }
-        // A write that failed stops the run at its next step.
-        writer.check()?;
-        // The last step's displacements are recovered once, by the writer (with the steps
-        // queued before it), for its output and for the checks of the summary.
-        let reply = match (ev.u, ev.contact) {
-            (None, Some(_)) if ev.last => {
-                let (tx, rx) = sync_channel(1);
-                self.last_u = Some((ev.step, rx));
-                Some(tx)
-            }
-            _ => None,
-        };
-        let out = StepOutput {
-            reply,
-            step: ev.step,
-            time: ev.time,
-            scale: ev.scale,
-            u: ev.u.cloned(),
-            contact: ev.contact.cloned(),
-            // The state to resume from, written after the step's files.
-            state: ev.checkpoint.map(|c| -> Box<dyn StateFile> {
-                Box::new(SavedRun {
-                    format: restart::FORMAT,
-                    id: self.id.to_string(),
-                    candidate_gap: self.candidate_gap,
-                    checkpoint: c.clone(),
-                    steps: ev.step,
-                    pvd: Vec::new(),
-                    journal: String::new(),
-                    energy: self.energy.as_ref().map(EnergyMeter::saved),
-                })
-            }),
-        };
-        if picked {
-            self.unwritten = None;
-            writer.send(out)
-        } else {
-            // Kept so that a run that stops early still writes its last converged state.
-            self.unwritten = Some(out);
-            Ok(())
-        }
-    }
-
-    /// Appends the journal line of step `ev` (`written`: its files are written), on the device
-    /// before the state that counts it.
-    fn journal_line(&mut self, ev: &StepEvent, written: bool) -> Result<(), RunError> {
-        let Some(f) = self.journal.as_mut() else {
-            return Ok(());
-        };
-        let line = restart::JournalLine {
-            record: ev.record.clone(),
-            energy: self.energy.as_ref().and_then(|m| m.last_row().cloned()),
-            written,
-        };
-        let text = restart::journal_text(std::slice::from_ref(&line));
-        let journal_error = |source| RunError::Write {
-            path: self.journal_path.display().to_string(),
-            source,
-        };
-        std::io::Write::write_all(f, text.as_bytes()).map_err(journal_error)?;
-        // On the device before the state that counts this line.
-        if ev.checkpoint.is_some() {
-            f.sync_data().map_err(journal_error)?;
-        }
-        Ok(())
-    }
-}
-
-/// The summary's equilibrium check of the last step, when its field comes from the writer
-/// (`last_u`: the step and where its field comes from; `sim.last_u` takes the field). The check
-/// starts as soon as the field is recovered, on a thread of its own, while this thread helps
-/// the writer with the steps still waiting: it fills the time the two output threads wait for
-/// the device's writes and for each other at the end, instead of following them.
-fn check_last_step(
-    model: &Model,
-    sim: &mut Simulation,
-    last_u: Option<(usize, Receiver<Vec<f64>>)>,
-    writer: &mut Background<'_, '_>,
-) -> Option<crate::checks::Check> {
-    match last_u {
-        Some((step, rx)) if sim.last_u.is_none() && sim.records.len() == step => {
-            let sim_ref: &Simulation = sim;
-            let (u, checked) = std::thread::scope(|s| {
-                let checking = std::thread::Builder::new()
-                    .name("stickslip-check".into())
-                    .spawn_scoped(s, move || {
-                        // None when the writer stopped on an error first (reported by
-                        // `finish`).
-                        let u = rx.recv().ok()?;
-                        let e = crate::checks::equilibrium(&crate::checks::Input {
-                            model,
-                            u: &u,
-                            scale: sim_ref.last_scale,
-                            state: sim_ref.last_state.as_ref(),
-                            records: &sim_ref.records,
-                            friction: None,
-                            equilibrium: None,
-                        });
-                        Some((u, e))
-                    })
-                    .expect("the check thread starts");
-                let _ = writer.help();
-                checking
-                    .join()
-                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
-                    .unzip()
-            });
-            sim.last_u = u;
-            checked
-        }
-        _ => {
-            let _ = writer.help();
-            None
-        }
-    }
-}
-
 /// Returns the heap's free pages to the system (glibc keeps the memory of freed blocks
 /// mapped, hundreds of MB after a run's build, which the process's exit would otherwise unmap
 /// after the output: 6 ms on Fig. 2 at L5, measured from the `run returned` trace mark to the
@@ -601,74 +436,6 @@ fn free_when_unshared<T>(mut v: std::sync::Arc<T>) {
                 v = shared;
                 std::thread::sleep(std::time::Duration::from_millis(1));
             }
-        }
-    }
-}
-
-/// The progress shown while a run steps: a bar on a terminal, a line per step otherwise.
-struct Progress<'a> {
-    case: &'a Case,
-    level: LogLevel,
-    total: usize,
-    bar: Option<indicatif::ProgressBar>,
-}
-
-impl<'a> Progress<'a> {
-    fn new(case: &'a Case, level: LogLevel) -> Self {
-        let total = case.total_steps();
-        let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
-        let bar = (level >= LogLevel::Info && tty).then(|| {
-            let b = indicatif::ProgressBar::new(total as u64);
-            b.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "{bar:30} {pos}/{len} steps {elapsed} {msg}",
-                )
-                .expect("valid template"),
-            );
-            b
-        });
-        Progress {
-            case,
-            level,
-            total,
-            bar,
-        }
-    }
-
-    fn step(&self, ev: &StepEvent) {
-        crate::trace::mark(format_args!("step {}", ev.step));
-        let r = ev.record;
-        let msg = match (r.pilot, r.contact) {
-            (Some(p), Some(c)) => format!(
-                "Q = {:.5}, P = {:.5}, a = {:.5}, c = {:.5}, {} its",
-                p.fx, -p.fy, c.a, c.c, r.iterations
-            ),
-            (Some(p), None) => format!(
-                "pilot u = ({:.4e}, {:.4e}), F = ({:.5}, {:.5})",
-                p.ux, p.uy, p.fx, p.fy
-            ),
-            _ => format!("traction scale {:.4}", r.traction_scale),
-        };
-        // Progress in nominal steps: cutbacks add steps, so the count is not the position.
-        let done = nominal_steps_done(self.case, ev.time);
-        match &self.bar {
-            Some(b) => {
-                b.set_position(done.round() as u64);
-                b.set_message(msg);
-            }
-            None if self.level >= LogLevel::Info => eprintln!(
-                "step {} (stage {}, {:.0} % of the load path): {msg}",
-                ev.step,
-                r.stage,
-                100.0 * done / self.total as f64
-            ),
-            None => {}
-        }
-    }
-
-    fn finish(&self) {
-        if let Some(b) = &self.bar {
-            b.finish_and_clear();
         }
     }
 }
