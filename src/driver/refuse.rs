@@ -12,7 +12,7 @@ use crate::model::Model;
 /// Displacement over model size above which a body ran away: no linear-elastic answer of a
 /// held body moves ten times its own size, while an unheld one, kept only by round-off, moves
 /// 1e9 times. A converged step of a pilot that moved farther is a failed step
-/// ([`unheld_after`]); the self-check `max_displacement` of a finished run calls a field that
+/// (`unheld_after`); the self-check `max_displacement` of a finished run calls a field that
 /// did an error.
 pub const DISPLACEMENT_ERROR: f64 = 10.0;
 

@@ -289,7 +289,7 @@ fn number_dofs(
     Ok((dofs, pilot_nodes))
 }
 
-/// [`Model::pilot_separation`]: when the pilot (on nodes `pn`) drives the slave or master body
+/// [`super::Model::pilot_separation`]: when the pilot (on nodes `pn`) drives the slave or master body
 /// and no support holds that body, the body and the direction of pilot motion that opens the
 /// contact (the slave's outward normal at the first touch, reversed for the slave body).
 fn pilot_separation(

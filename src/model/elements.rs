@@ -7,7 +7,7 @@ use crate::elasticity::{self, Material};
 
 impl Model {
     /// The displacements of element `i` (of `self.elems`) from the free solution `u`: the same
-    /// numbers as [`DofMap::element_displacement`], read through a table of where each is
+    /// numbers as [`crate::dofs::DofMap::element_displacement`], read through a table of where each is
     /// (an index into `u`, or into the prescribed values past `u`'s length, or none) built at
     /// the first call: 48 bytes per element read in order, instead of each node's two DOFs
     /// (32 bytes) looked up in a table the size of the mesh, which was a tenth of the work of
@@ -48,7 +48,7 @@ impl Model {
     }
 
     /// Where each DOF of each element is (of `self.elems`): its index among the free DOFs
-    /// (below [`DofMap::n_free`]), `n_free` plus its index among the prescribed ones, or
+    /// (below [`crate::dofs::DofMap::n_free`]), `n_free` plus its index among the prescribed ones, or
     /// `u32::MAX` for none.
     pub fn element_dof_table(&self) -> &[[u32; 12]] {
         // Built on the calling thread: a rayon task waiting for this initialisation (the

@@ -1,7 +1,7 @@
 //! Files written whole or not at all: each file is written to a temporary name in its
 //! directory and renamed into place ([`commit`]), several files together or none
 //! ([`write_temporaries`]), large ones past the page cache where the file system allows it
-//! ([`super::direct`]), the tail of a large one ahead of its head ([`write_ahead`]), and the
+//! (`super::direct`), the tail of a large one ahead of its head ([`write_ahead`]), and the
 //! renames on a thread of their own ([`Reaper`]).
 
 use super::direct;

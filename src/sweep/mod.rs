@@ -277,7 +277,7 @@ pub struct SweepRow {
     pub status: String,
     pub steps: usize,
     pub newton_iterations: usize,
-    /// Factorisations of the contact Newton solves (see [`Summary::lu_factorisations`]).
+    /// Factorisations of the contact Newton solves (see [`crate::report::Summary::lu_factorisations`]).
     pub lu_factorisations: usize,
     pub wall_s: f64,
     /// Stick and transition semi-widths at the last converged step.

@@ -1,7 +1,7 @@
 //! `stickslip analytic …`: the closed forms from the command line.
 //!
 //! Scalars are printed as pretty JSON, curves as CSV with a header row (the CSV writers are in
-//! [`curves`]). Geometry defaults to VM272 (two cylinders of 8 mm, E = 200 N/mm², ν = 0.3,
+//! `curves`). Geometry defaults to VM272 (two cylinders of 8 mm, E = 200 N/mm², ν = 0.3,
 //! P = 10 N/mm); every subcommand that needs it accepts `--r1 --r2 --e1 --nu1 --e2 --nu2 --load`,
 //! and `--case CASE` takes the radii, moduli, load and friction law from a case file
 //! ([`crate::analytic::case_scene`]), each flag given as well overriding the case's value. See
@@ -9,9 +9,9 @@
 //!
 //! | module | content |
 //! |---|---|
-//! | [`args`] | the clap arguments of each subcommand |
-//! | [`inputs`] | what the flags resolve to (scene, law, force, a case's numbers); [`CliError`] |
-//! | [`curves`] | the CSV curve writers |
+//! | `args` | the clap arguments of each subcommand |
+//! | `inputs` | what the flags resolve to (scene, law, force, a case's numbers); [`CliError`] |
+//! | `curves` | the CSV curve writers |
 //! | this file | the dispatch and the JSON writers |
 
 mod args;

@@ -1,6 +1,6 @@
 //! Reading gmsh MSH 4.1 files (ASCII or binary) through `mshio`, plus the `$PhysicalNames`
 //! section, which `mshio` skips; the nodes and elements of a well-formed binary file are read
-//! directly ([`binary`]).
+//! directly (`binary`).
 //!
 //! Only 6-node triangles (type 9) and 3-node lines (type 8) are kept as elements; points
 //! (type 15) are ignored; any other type in a physical group is an error naming the element.
@@ -40,7 +40,7 @@ pub fn read(path: &Path) -> Result<Mesh, MeshReadError> {
 /// Parses the bytes of a mesh file; `path` is used for messages only.
 ///
 /// The nodes and elements of a well-formed binary file are read directly
-/// ([`binary`]), the rest of it (and any other file) through `mshio`.
+/// (`binary`), the rest of it (and any other file) through `mshio`.
 pub fn parse(bytes: &[u8], path: &Path) -> Result<Mesh, MeshReadError> {
     parse_with(bytes, path, true)
 }
