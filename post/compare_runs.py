@@ -1,9 +1,12 @@
 #!/usr/bin/env python3
 """Compares two trees of run outputs (DIR_A/<case>/..., DIR_B/<case>/...) file by file, byte
 for byte, apart from what measures time: `summary.json` is compared without its timing and
-memory fields, its output directory and how the model cache served it (`cache`: a hit gives
-the same results as a cold run), `history.csv` and `energy.csv` without the `wall_s`
-column. Prints every file that differs and the count; exits 1 if any does.
+memory fields, its output directory, how the model cache served it (`cache`: a hit gives
+the same results as a cold run) and the bytes of the output (`output_bytes`: the timings'
+digits are in the files), `history.csv` and `energy.csv` without the `wall_s` column, the
+journal `steps.jsonl` line by line as JSON without the timing fields, and the restart states
+`state_NNNN.json` without their `id` (it hashes the program's build, which a restructure
+changes). Prints every file that differs and the count; exits 1 if any does.
 
 Used to check that a restructure leaves the output of the shipped cases unchanged:
 
@@ -18,7 +21,9 @@ import os
 import sys
 
 TIMING_KEYS = {"timings_s", "contact_solve_s", "contact_phases_s", "peak_memory_mib", "wall_s", "output_dir",
-               "build_s", "sweep_s", "runs", "t_solve", "t_contact", "cache"}
+               "build_s", "sweep_s", "runs", "t_solve", "t_contact", "cache", "output_bytes"}
+# Keys that name the program's build rather than what it computed (restart states).
+BUILD_KEYS = {"id"}
 
 
 def strip(d):
@@ -27,6 +32,15 @@ def strip(d):
     if isinstance(d, list):
         return [strip(x) for x in d]
     return d
+
+
+def strip_build(d):
+    """`d` without its timing keys, nor the build's identity at its top level."""
+    return {k: v for k, v in strip(d).items() if k not in BUILD_KEYS}
+
+
+def jsonl_rows(path):
+    return [strip(json.loads(line)) for line in open(path).read().splitlines() if line]
 
 
 def csv_rows(path):
@@ -52,8 +66,12 @@ def main():
             continue
         for f in fa:
             pa, pb = os.path.join(da, f), os.path.join(db, f)
-            if f.endswith(".json"):
+            if f.startswith("state_") and f.endswith(".json"):
+                same = strip_build(json.load(open(pa))) == strip_build(json.load(open(pb)))
+            elif f.endswith(".json"):
                 same = strip(json.load(open(pa))) == strip(json.load(open(pb)))
+            elif f.endswith(".jsonl"):
+                same = jsonl_rows(pa) == jsonl_rows(pb)
             elif f.endswith(".csv"):
                 same = csv_rows(pa) == csv_rows(pb)
             else:
