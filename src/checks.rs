@@ -22,8 +22,9 @@
 //!   a parabola and the contact has not reached a face end).
 
 use crate::contact::solver::{State, Status};
+pub use crate::driver::DISPLACEMENT_ERROR;
 use crate::model::Model;
-use crate::report::{FrictionSummary, StepRecord};
+use crate::record::{FrictionSummary, StepRecord};
 use serde::Serialize;
 
 /// How much a check matters when it fails.
@@ -86,11 +87,9 @@ impl Check {
 pub const EQUILIBRIUM_LIMIT: f64 = 1e-6;
 /// The strain whose force is the smallest scale of the equilibrium check.
 const ROUND_OFF_STRAIN: f64 = 1e-12;
-/// Displacement over model size: above the first, small-strain theory is doubtful (warning);
-/// above the second a body ran away (error: no linear-elastic answer of a held body moves ten
-/// times its own size, while an unheld one, kept only by round-off, moves 1e9 times).
+/// Displacement over model size above which small-strain theory is doubtful (warning); above
+/// [`DISPLACEMENT_ERROR`] a body ran away (error).
 pub const DISPLACEMENT_WARN: f64 = 0.01;
-pub const DISPLACEMENT_ERROR: f64 = 10.0;
 /// Fewer elements across the contact width than this draws a warning.
 pub const MIN_ELEMENTS_ACROSS: f64 = 10.0;
 /// Relative deviation of a from Hertz that draws a warning.

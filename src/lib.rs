@@ -25,6 +25,7 @@ pub mod model;
 pub mod output;
 pub mod probe;
 pub mod quadrature;
+pub mod record;
 pub mod report;
 pub mod restart;
 pub mod run;

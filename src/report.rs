@@ -1,84 +1,17 @@
-//! What a run reports: the record of each step, the friction summary (Q_max, Λ, χ, Ψ, s0 and
-//! the closed forms through [`crate::analytic`]), the self-checks of the last converged step,
-//! `summary.json` and the one-screen end summary.
+//! What a run reports: the friction summary (Q_max, Λ, χ, Ψ, s0 and the closed forms through
+//! [`crate::analytic`]), the self-checks of the last converged step, `summary.json`,
+//! `history.csv` and the one-screen end summary. The records they are made of are in
+//! [`crate::record`].
 
 use crate::case::Case;
 use crate::contact::solver::State;
 use crate::driver::Simulation;
 use crate::error::{CheckFailure, RunError};
 use crate::model::Model;
-use crate::model::step::{ContactFigures, PilotState};
+use crate::model::step::ContactFigures;
+use crate::record::{FrictionSummary, StepRecord};
 use serde::Serialize;
 use std::path::Path;
-
-/// One converged load step.
-#[derive(Clone, Debug, Serialize, serde::Deserialize)]
-pub struct StepRecord {
-    pub step: usize,
-    pub stage: usize,
-    pub time: f64,
-    pub traction_scale: f64,
-    pub pilot: Option<PilotState>,
-    pub iterations: usize,
-    pub cutbacks: usize,
-    pub contact: Option<ContactFigures>,
-    pub wall_s: f64,
-    /// The cycle (from 1) of a stage of a cycle group.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub cycle: Option<usize>,
-}
-
-/// The friction law and the paper's scales of the run (eqs. Maugis, Maugis10, Lambda, s0).
-#[derive(Clone, Debug, Serialize)]
-pub struct FrictionSummary {
-    pub law: crate::friction::FrictionLaw,
-    pub f_s: f64,
-    pub f_d: Option<f64>,
-    /// Slip length Δ and fracture energy per unit pressure W/p (slip-weakening laws).
-    pub delta: Option<f64>,
-    pub w_over_p: Option<f64>,
-    /// Normal load P (contact force along the common normal at the last step), effective
-    /// radius R (fitted to the initial gap, g0 ≈ t²/2R) and Hertz semi-width a.
-    pub load: f64,
-    pub radius: f64,
-    /// The relative RMS residual of that fit (see [`crate::checks::fit_radius`]) and whether
-    /// the profile counts as Hertzian (`profile_rms ≤` [`crate::checks::HERTZ_PROFILE_LIMIT`]
-    /// with a finite positive R). Where it does not, no closed form of the paper applies: `a_hertz`,
-    /// Λ, χ, Ψ, s0 and the predicted Q_max/P are absent and `not_hertzian` says why.
-    pub profile_rms: f64,
-    pub hertzian: bool,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub not_hertzian: Option<String>,
-    pub a_hertz: Option<f64>,
-    pub lambda: Option<f64>,
-    pub chi: Option<f64>,
-    pub psi: Option<f64>,
-    /// Small-scale transition length at the centre, s0 = 2Λa/π, over a.
-    pub s0_over_a: Option<f64>,
-    /// Largest slave element in the contact, and whether it resolves s0 (h ≤ s0/2).
-    pub h_contact: f64,
-    pub resolved: Option<bool>,
-    /// The largest tangential load reached (|pilot force| along the tangent), and the apparent
-    /// static friction coefficient Q_max/P it implies.
-    pub q_max: f64,
-    pub apparent_friction: f64,
-    /// Closed-form predictions of Q_max/P: the JKR limit (eq. QJKR at its maximum, with Ψ) and
-    /// the double Cattaneo–Mindlin maximum (with Λ).
-    pub apparent_friction_jkr: Option<f64>,
-    pub apparent_friction_dcm: Option<f64>,
-}
-
-impl FrictionSummary {
-    /// f_d P when `q_max` is below it by more than 0.1 %: the least the contact carries once
-    /// every point has weakened, so a force-controlled run that stopped there met a local
-    /// peak of the load path, not gross sliding. (The margin is above the bracket's width,
-    /// 2^-11 of a nominal step, and the change of P over it where P moves with Q.)
-    pub fn local_peak(&self, q_max: f64) -> Option<f64> {
-        self.f_d
-            .map(|fd| fd * self.load)
-            .filter(|fdp| q_max < (1.0 - 1e-3) * fdp)
-    }
-}
 
 /// What `summary.json` holds.
 #[derive(Clone, Debug, Serialize)]
@@ -477,12 +410,15 @@ pub fn history_csv(records: &[StepRecord]) -> String {
 
 /// The summary of a finished (or stopped) run, with why it stopped: the failure (a solver
 /// failure, or an error-level check of the last step) and the bracket of a lost equilibrium.
+/// `equilibrium` is the equilibrium check of the last step when the caller computed it already
+/// (a run computes it while its last steps are written).
 pub fn summarise(
     model: &Model,
     case: &Case,
     case_path: &Path,
     out_dir: &Path,
     sim: Simulation,
+    equilibrium: Option<crate::checks::Check>,
 ) -> (Summary, Option<RunError>, Option<(f64, f64)>) {
     let Simulation {
         records,
@@ -496,7 +432,6 @@ pub fn summarise(
         last_u,
         last_state,
         last_scale,
-        equilibrium,
         ..
     } = sim;
     let q_max = records

@@ -50,7 +50,7 @@ pub struct SavedRun {
 /// energy row.
 #[derive(Serialize, Deserialize)]
 pub struct JournalLine {
-    pub record: crate::report::StepRecord,
+    pub record: crate::record::StepRecord,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub energy: Option<crate::energy::EnergyRow>,
     /// Whether the step's files were written (its `.pvd` entries).
@@ -143,9 +143,13 @@ pub fn program_identity(inputs: &[&[u8]]) -> String {
     crate::output::content_id(&parts)
 }
 
-/// The file name of the state of `step`.
-pub fn state_name(step: usize) -> String {
-    format!("state_{step:04}.json")
+impl crate::output::series::StateFile for SavedRun {
+    /// `state_NNNN.json`: the state as JSON.
+    fn bytes(&self) -> Vec<u8> {
+        serde_json::to_string(self)
+            .expect("serialisable")
+            .into_bytes()
+    }
 }
 
 /// Reads the state at `path` (a state file, or a directory: its latest state) and checks that

@@ -356,7 +356,8 @@ fn a_batch_of_steps_writes_what_one_step_at_a_time_writes() {
 /// (prepared by either thread) stays behind, temporary or not.
 #[test]
 fn the_writer_with_the_driver_helping_writes_what_one_step_at_a_time_writes() {
-    use stickslip::output::series::{Background, Series};
+    use stickslip::output::background::Background;
+    use stickslip::output::series::Series;
     let (model, steps) = cm_steps_on_l1();
     assert!(steps.len() >= 6, "{} steps", steps.len());
     let out = step_output;
@@ -410,7 +411,7 @@ fn the_writer_with_the_driver_helping_writes_what_one_step_at_a_time_writes() {
         &model,
         &steps,
         &failed,
-        stickslip::output::series::QUEUE,
+        stickslip::output::background::QUEUE,
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -424,7 +425,8 @@ fn assert_a_failed_step_stops_the_series(
     failed: &std::path::Path,
     queue: usize,
 ) {
-    use stickslip::output::series::{Background, Series};
+    use stickslip::output::background::Background;
+    use stickslip::output::series::Series;
     std::fs::create_dir_all(failed).unwrap();
     let bad = steps[steps.len() / 2].0;
     let bad_name = format!("cm_{bad:04}.vtu");
@@ -479,7 +481,8 @@ fn assert_same_files(one: &std::path::Path, other: &std::path::Path, n_steps: us
 /// instead of waiting for the writer: the files are those of one step at a time, byte for byte.
 #[test]
 fn a_full_queue_has_the_driver_prepare_steps_with_the_same_files() {
-    use stickslip::output::series::{Background, Series};
+    use stickslip::output::background::Background;
+    use stickslip::output::series::Series;
     let (model, steps) = cm_steps_on_l1();
     assert!(steps.len() >= 6, "{} steps", steps.len());
     let dir = tempdir("writer-full");
@@ -525,7 +528,8 @@ fn a_full_queue_has_the_driver_prepare_steps_with_the_same_files() {
 /// steps it was handed.
 #[test]
 fn a_writer_dropped_without_finish_ends_after_writing_what_it_holds() {
-    use stickslip::output::series::{Background, Series};
+    use stickslip::output::background::Background;
+    use stickslip::output::series::Series;
     let (model, steps) = cm_steps_on_l1();
     let dir = tempdir("writer-dropped");
     std::fs::create_dir_all(&dir).unwrap();

@@ -377,7 +377,7 @@ fn jacobian_against_finite_differences(
     use stickslip::case::Control;
     use stickslip::contact::solver::{Iterate, PilotDrive, State, Status};
     use stickslip::friction::FrictionLaw;
-    use stickslip::model::StepLoad;
+    use stickslip::model::step::StepLoad;
     let cm = model.contact.as_ref().unwrap();
     for law in [
         FrictionLaw::ramp(0.15, 0.1, 2e-3).unwrap(),
@@ -706,7 +706,7 @@ fn force_step(
     cache: Option<&mut stickslip::contact::solver::LuCache>,
 ) -> Result<stickslip::contact::solver::StepOutcome, stickslip::contact::solver::ContactError> {
     use stickslip::case::Control;
-    let load = stickslip::model::StepLoad {
+    let load = stickslip::model::step::StepLoad {
         scale: 0.0,
         control: [Control::Force(q), Control::Force(-10.0)],
     };
@@ -756,7 +756,7 @@ fn first_contact_from_the_frictionless_set_gives_the_same_step() {
     use stickslip::case::Control;
     use stickslip::contact::solver::LuCache;
     use stickslip::friction::FrictionLaw;
-    use stickslip::model::StepLoad;
+    use stickslip::model::step::StepLoad;
     let law = FrictionLaw::ramp(0.15, 0.1, 2.9e-4).unwrap();
     for (name, lower, upper) in [
         ("identical", (200.0, 0.3), (200.0, 0.3)),
@@ -827,7 +827,7 @@ fn first_contact_from_the_hertzian_set_gives_the_same_step_in_fewer_iterations()
     use stickslip::case::Control;
     use stickslip::contact::solver::{LuCache, Status};
     use stickslip::friction::FrictionLaw;
-    use stickslip::model::StepLoad;
+    use stickslip::model::step::StepLoad;
     let law = FrictionLaw::ramp(0.15, 0.1, 2.9e-4).unwrap();
     // (name, lower body, upper body, pilot x force, pilot y force, iterations at most from
     // the Hertzian set, measured from the closest nodes)

@@ -7,7 +7,7 @@ use common::{repo, sci, validation_row};
 use stickslip::case::{Case, Control};
 use stickslip::contact::solver::{Method, Options, Status};
 use stickslip::model::Model;
-use stickslip::model::StepLoad;
+use stickslip::model::step::StepLoad;
 
 const E_STAR: f64 = 109.890_109_890_109_9;
 const R_EFF: f64 = 4.0;

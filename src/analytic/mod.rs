@@ -14,7 +14,7 @@
 //! | [`scales`] | `s0` (s0), `Λ` (Lambda), `χ` (chi), `Ψ`; small-scale criterion |
 //! | [`apparent`] | apparent static friction `Q_max/(f_d P)` vs `f_s/f_d` (Fig. 6) |
 //! | [`elliptic`] | complete elliptic integrals `K(m)`, `E(m)` by the AGM |
-//! | [`cli`] | the `stickslip analytic …` subcommands (the CSV curve writers in `cli_curves`) |
+//! | [`cli`] | the `stickslip analytic …` subcommands: their arguments, JSON and CSV writers |
 //! | [`case_scene`] | the radii, moduli, load and law of a case file, for `--case` |
 //!
 //! Units are whatever the caller uses consistently (the VM272 defaults are mm, N/mm², N/mm).
@@ -23,7 +23,6 @@ pub mod apparent;
 pub mod case_scene;
 pub mod cattaneo;
 pub mod cli;
-mod cli_curves;
 pub mod dcm;
 pub mod elliptic;
 pub mod hertz;

@@ -19,7 +19,6 @@ pub mod ordering;
 pub mod par;
 mod partial;
 pub mod saddle;
-pub mod simd;
 pub mod supernodal;
 pub mod values;
 

@@ -6,7 +6,6 @@
 pub mod check;
 pub mod gmsh;
 pub mod info;
-mod msh_binary;
 
 use std::path::PathBuf;
 

@@ -270,157 +270,30 @@ fn restore(
     sizes: &Sizes,
     grounded: &[usize],
 ) -> Result<Restored, String> {
-    let bad = |what: &str| format!("inconsistent ({what})");
     if reader.next_tag() != Some(tag::VALUES) {
         return Err(bad("no factor values"));
     }
     // Mapped now, checked against its hash on a second thread below.
     let (_, values) = reader.map_next()?;
-    let mut sec: HashMap<u32, Words> = HashMap::new();
-    while reader.remaining() > 0 {
-        let (t, w) = reader.read_next()?;
-        sec.insert(t, w);
-    }
-    let mut take_u = |t: u32, what: &str| -> Result<Vec<usize>, String> {
-        sec.remove(&t)
-            .and_then(Words::into_u64)
-            .map(|v| v.into_iter().map(|x| x as usize).collect())
-            .ok_or_else(|| bad(what))
-    };
-    let meta = take_u(tag::META, "sizes")?;
-    let ordering = take_u(tag::ORDERING, "ordering")?;
-    let pattern = if sizes.contact {
-        None
-    } else {
-        Some((
-            take_u(tag::COL_PTR, "pattern")?,
-            take_u(tag::ROW_IDX, "pattern")?,
-        ))
-    };
-    let stored_grounded = take_u(tag::GROUNDED, "grounded DOFs")?;
-    let stored_row_order = match &sizes.row_order {
-        Some(_) if sizes.contact => {
-            Some(take_u(tag::PREFIX_ORDER, "order of the constraint rows")?)
-        }
-        _ => None,
-    };
-    // A contact model's supernodal layout (its ordering is the stored one, then the rows).
-    let layout = if sizes.contact {
-        Some(crate::la::Supernodes {
-            begin: take_u(tag::SN_BEGIN, "supernodes")?,
-            row_ptr: take_u(tag::SN_ROW_PTR, "supernodes")?,
-            rows: take_u(tag::SN_ROWS, "supernodes")?,
-            val_ptr: take_u(tag::SN_VAL_PTR, "supernodes")?,
-            fwd: Vec::new(),
-        })
-    } else {
-        None
-    };
-    let mut take_f = |t: u32, len: usize, what: &str| -> Result<Vec<f64>, String> {
-        sec.remove(&t)
-            .and_then(Words::into_f64)
-            .filter(|v| v.len() == len)
-            .ok_or_else(|| bad(what))
-    };
-    let kg = take_f(tag::GROUND_KG, grounded.len(), "grounding springs")?;
-    let f_prescribed = take_f(tag::F_PRESCRIBED, sizes.n_free, "prescribed forces")?;
-    let (n, n_i, n_r, m) = (sizes.n_free, sizes.n_interior, sizes.n_retained, sizes.m);
-    let kind = if sizes.contact { 1 } else { 2 };
-    if meta.len() != META_LEN || meta[..5] != [kind, n, n_i, n_r, m] {
-        return Err(bad("built for a model of other sizes"));
-    }
-    if stored_grounded != grounded {
-        return Err(bad("other grounded DOFs"));
-    }
-    if let Some((col_ptr, row_idx)) = &pattern
-        && (meta[5] != row_idx.len() || !is_upper_pattern(col_ptr, row_idx, n))
-    {
-        return Err(bad("stiffness pattern"));
-    }
-    let krr_scale = f64::from_bits(meta[6] as u64);
-    let grounding: Vec<(usize, f64)> = grounded.iter().copied().zip(kg).collect();
-    let (w, w0) = if sizes.contact {
-        let wv = take_f(tag::DELASSUS, m * m, "Delassus operator")?;
-        let ft = take_f(tag::F_TRACTION, n, "traction forces")?;
-        let w0t = take_f(tag::W0_TRACTION, m, "condensed traction loads")?;
-        let w0p = take_f(tag::W0_PRESCRIBED, m, "condensed prescribed loads")?;
-        let w = faer::Mat::from_fn(m, m, |i, j| wv[j * m + i]);
-        (Some(w), Some((ft, w0t, w0p)))
-    } else {
-        (None, None)
-    };
-    let prefix = match &sizes.row_order {
-        Some(order) if sizes.contact => {
-            if stored_row_order.as_ref() != Some(order) {
-                return Err(bad("order of the constraint rows"));
-            }
-            let packed = take_f(tag::PREFIX_C, m * (m + 1) / 2, "factor of W")?;
-            Some(crate::contact::solver::PrefixFactor::new(
-                unpack_lower(&packed, m),
-                order.clone(),
-            ))
-        }
-        _ => {
-            if sec.contains_key(&tag::PREFIX_C) || sec.contains_key(&tag::PREFIX_ORDER) {
-                return Err(bad("factor of W for a model without one"));
-            }
-            None
-        }
-    };
-    let order_len = if sizes.contact { n } else { n_i };
+    let mut sec = Sections::read(&mut reader)?;
+    let frame = Frame::take(&mut sec, sizes, grounded)?;
+    let (n, n_r, m) = (sizes.n_free, sizes.n_retained, sizes.m);
+    let grounding: Vec<(usize, f64)> = grounded.iter().copied().zip(frame.kg).collect();
+    let (w, w0) = delassus(&mut sec, sizes)?;
+    let prefix = prefix_factor(&mut sec, sizes, frame.stored_row_order)?;
+    let ordering = frame.ordering;
+    let order_len = if sizes.contact { n } else { sizes.n_interior };
     if !is_permutation(&ordering, order_len) {
         return Err(bad("ordering"));
     }
-    let layout = layout.map(|mut l| {
+    // A contact model's factor is read with its stored layout (no analysis); a partial
+    // factorisation's analysis is redone from the stored ordering, while a second thread reads
+    // the factor values.
+    let layout = frame.layout.map(|mut l| {
         l.fwd = ordering.iter().copied().chain(n..n + m).collect();
         l
     });
-    let (chol, analyse_s) = factor_of(values, layout, pattern.as_ref(), &ordering, (n, n_r, m))?;
-    Ok(Restored {
-        condensed: Condensed {
-            n_i,
-            n_r,
-            chol,
-            grounding,
-            krr_scale,
-        },
-        w,
-        prefix,
-        f_prescribed,
-        stiffness_nonzeros: meta[5],
-        w0,
-        analyse_s,
-        report: Report::off(None),
-    })
-}
-
-/// The lower triangle of an `m × m` matrix from its columns below the diagonal packed one
-/// after the other (the upper triangle zero).
-fn unpack_lower(packed: &[f64], m: usize) -> faer::Mat<f64> {
-    let mut c = faer::Mat::<f64>::zeros(m, m);
-    let mut at = 0;
-    for j in 0..m {
-        for i in j..m {
-            c[(i, j)] = packed[at];
-            at += 1;
-        }
-    }
-    c
-}
-
-/// The factor of a restored model and the seconds its analysis took: a contact model's
-/// factor is read with its stored `layout` (no analysis); a partial factorisation's analysis
-/// is redone from the stored `ordering` and stiffness `pattern`, while a second thread checks
-/// the mapped factor `values` against their hash. `(n, n_r, m)`: free DOFs, retained DOFs,
-/// constraint rows.
-fn factor_of(
-    values: cache::Unchecked,
-    layout: Option<crate::la::Supernodes>,
-    pattern: Option<&(Vec<usize>, Vec<usize>)>,
-    ordering: &[usize],
-    (n, n_r, m): (usize, usize, usize),
-) -> Result<(Factor, f64), String> {
-    let bad = |what: &str| format!("inconsistent ({what})");
+    let pattern = frame.pattern;
     let (analysis, analyse_s, values) = std::thread::scope(|s| {
         let values = s.spawn(move || values.check());
         let t = Instant::now();
@@ -430,8 +303,8 @@ fn factor_of(
                 .map(|()| Analysis::Layout(Arc::new(l)))
                 .map_err(|e| bad(&e)),
             None => {
-                let (col_ptr, row_idx) = pattern.expect("taken without contact");
-                PartialSymbolic::with_ordering(n, n_r, col_ptr, row_idx, ordering)
+                let (col_ptr, row_idx) = pattern.as_ref().expect("taken without contact");
+                PartialSymbolic::with_ordering(n, n_r, col_ptr, row_idx, &ordering)
                     .map(Analysis::Partial)
                     .map_err(|e| format!("unusable: {e}"))
             }
@@ -448,7 +321,194 @@ fn factor_of(
         Analysis::Partial(s) => s.from_values(values).map(Factor::Partial),
     }
     .map_err(|e| format!("unusable: {e}"))?;
-    Ok((chol, analyse_s))
+    Ok(Restored {
+        condensed: Condensed {
+            n_i: sizes.n_interior,
+            n_r,
+            chol,
+            grounding,
+            krr_scale: frame.krr_scale,
+        },
+        w,
+        prefix,
+        f_prescribed: frame.f_prescribed,
+        stiffness_nonzeros: frame.stiffness_nonzeros,
+        w0,
+        analyse_s,
+        report: Report::off(None),
+    })
+}
+
+/// Why an entry cannot be used: `what` of it does not fit the model.
+fn bad(what: &str) -> String {
+    format!("inconsistent ({what})")
+}
+
+/// The sections of an entry after its factor values, by tag; each taken once.
+struct Sections(HashMap<u32, Words>);
+
+impl Sections {
+    /// Reads the sections left in `reader`.
+    fn read(reader: &mut cache::Reader) -> Result<Self, String> {
+        let mut sec: HashMap<u32, Words> = HashMap::new();
+        while reader.remaining() > 0 {
+            let (t, w) = reader.read_next()?;
+            sec.insert(t, w);
+        }
+        Ok(Sections(sec))
+    }
+
+    /// Section `t` as indices (`what` names it in the error).
+    fn usizes(&mut self, t: u32, what: &str) -> Result<Vec<usize>, String> {
+        self.0
+            .remove(&t)
+            .and_then(Words::into_u64)
+            .map(|v| v.into_iter().map(|x| x as usize).collect())
+            .ok_or_else(|| bad(what))
+    }
+
+    /// Section `t` as `len` floats (`what` names it in the error).
+    fn floats(&mut self, t: u32, len: usize, what: &str) -> Result<Vec<f64>, String> {
+        self.0
+            .remove(&t)
+            .and_then(Words::into_f64)
+            .filter(|v| v.len() == len)
+            .ok_or_else(|| bad(what))
+    }
+}
+
+/// What every entry holds besides its factor values and a contact model's `W`, checked against
+/// the model's sizes and grounded DOFs.
+struct Frame {
+    ordering: Vec<usize>,
+    /// The stiffness's upper pattern (a model without contact).
+    pattern: Option<(Vec<usize>, Vec<usize>)>,
+    /// The order of the constraint rows (a contact model that has one).
+    stored_row_order: Option<Vec<usize>>,
+    /// The supernodal layout of a contact model's factor, its `fwd` not yet filled in.
+    layout: Option<crate::la::Supernodes>,
+    /// The grounding springs, in the order of the grounded DOFs.
+    kg: Vec<f64>,
+    f_prescribed: Vec<f64>,
+    stiffness_nonzeros: usize,
+    krr_scale: f64,
+}
+
+impl Frame {
+    fn take(sec: &mut Sections, sizes: &Sizes, grounded: &[usize]) -> Result<Frame, String> {
+        let meta = sec.usizes(tag::META, "sizes")?;
+        let ordering = sec.usizes(tag::ORDERING, "ordering")?;
+        let pattern = if sizes.contact {
+            None
+        } else {
+            Some((
+                sec.usizes(tag::COL_PTR, "pattern")?,
+                sec.usizes(tag::ROW_IDX, "pattern")?,
+            ))
+        };
+        let stored_grounded = sec.usizes(tag::GROUNDED, "grounded DOFs")?;
+        let stored_row_order = match &sizes.row_order {
+            Some(_) if sizes.contact => {
+                Some(sec.usizes(tag::PREFIX_ORDER, "order of the constraint rows")?)
+            }
+            _ => None,
+        };
+        // A contact model's supernodal layout (its ordering is the stored one, then the rows).
+        let layout = if sizes.contact {
+            Some(crate::la::Supernodes {
+                begin: sec.usizes(tag::SN_BEGIN, "supernodes")?,
+                row_ptr: sec.usizes(tag::SN_ROW_PTR, "supernodes")?,
+                rows: sec.usizes(tag::SN_ROWS, "supernodes")?,
+                val_ptr: sec.usizes(tag::SN_VAL_PTR, "supernodes")?,
+                fwd: Vec::new(),
+            })
+        } else {
+            None
+        };
+        let kg = sec.floats(tag::GROUND_KG, grounded.len(), "grounding springs")?;
+        let f_prescribed = sec.floats(tag::F_PRESCRIBED, sizes.n_free, "prescribed forces")?;
+        let (n, n_i, n_r, m) = (sizes.n_free, sizes.n_interior, sizes.n_retained, sizes.m);
+        let kind = if sizes.contact { 1 } else { 2 };
+        if meta.len() != META_LEN || meta[..5] != [kind, n, n_i, n_r, m] {
+            return Err(bad("built for a model of other sizes"));
+        }
+        if stored_grounded != grounded {
+            return Err(bad("other grounded DOFs"));
+        }
+        if let Some((col_ptr, row_idx)) = &pattern
+            && (meta[5] != row_idx.len() || !is_upper_pattern(col_ptr, row_idx, n))
+        {
+            return Err(bad("stiffness pattern"));
+        }
+        Ok(Frame {
+            ordering,
+            pattern,
+            stored_row_order,
+            layout,
+            kg,
+            f_prescribed,
+            stiffness_nonzeros: meta[5],
+            krr_scale: f64::from_bits(meta[6] as u64),
+        })
+    }
+}
+
+/// A contact model's Delassus operator `W` and its condensed loads `w0` (traction forces,
+/// their `w0`, `w0` of the prescribed displacements); none without contact.
+type Delassus = (
+    Option<faer::Mat<f64>>,
+    Option<(Vec<f64>, Vec<f64>, Vec<f64>)>,
+);
+
+/// [`Delassus`] from the entry's sections.
+fn delassus(sec: &mut Sections, sizes: &Sizes) -> Result<Delassus, String> {
+    if !sizes.contact {
+        return Ok((None, None));
+    }
+    let (n, m) = (sizes.n_free, sizes.m);
+    let wv = sec.floats(tag::DELASSUS, m * m, "Delassus operator")?;
+    let ft = sec.floats(tag::F_TRACTION, n, "traction forces")?;
+    let w0t = sec.floats(tag::W0_TRACTION, m, "condensed traction loads")?;
+    let w0p = sec.floats(tag::W0_PRESCRIBED, m, "condensed prescribed loads")?;
+    let w = faer::Mat::from_fn(m, m, |i, j| wv[j * m + i]);
+    Ok((Some(w), Some((ft, w0t, w0p))))
+}
+
+/// The Cholesky factor of `W` in the order of the constraint rows, for a contact model that
+/// has one (its stored order `stored_row_order` must be the model's); an entry of any other
+/// model must hold none.
+fn prefix_factor(
+    sec: &mut Sections,
+    sizes: &Sizes,
+    stored_row_order: Option<Vec<usize>>,
+) -> Result<Option<crate::contact::solver::PrefixFactor>, String> {
+    let m = sizes.m;
+    match &sizes.row_order {
+        Some(order) if sizes.contact => {
+            if stored_row_order.as_ref() != Some(order) {
+                return Err(bad("order of the constraint rows"));
+            }
+            let packed = sec.floats(tag::PREFIX_C, m * (m + 1) / 2, "factor of W")?;
+            let mut c = faer::Mat::<f64>::zeros(m, m);
+            let mut at = 0;
+            for j in 0..m {
+                for i in j..m {
+                    c[(i, j)] = packed[at];
+                    at += 1;
+                }
+            }
+            Ok(Some(crate::contact::solver::PrefixFactor::new(
+                c,
+                order.clone(),
+            )))
+        }
+        _ => {
+            if sec.0.contains_key(&tag::PREFIX_C) || sec.0.contains_key(&tag::PREFIX_ORDER) {
+                return Err(bad("factor of W for a model without one"));
+            }
+            Ok(None)
+        }
+    }
 }
 
 enum Analysis {

@@ -1,47 +1,29 @@
 //! A model ready to solve: the checked mesh, the DOF numbering, the assembled and factorised
 //! stiffness, the condensed system on the retained DOFs and the load vectors.
+//!
+//! | module | content |
+//! |---|---|
+//! | this file | [`Model`] and its build: the parts, the linear algebra (built, or restored from the model cache), the contact loads |
+//! | `bodies` | what a case gives on its mesh before any matrix: elements, boundaries, contact pair, DOFs, grounding, tractions |
+//! | `cached` | the model's linear algebra in the model cache |
+//! | [`step`] | one load step on the condensed model |
+//! | `elements` | solution fields read element by element: displacements, nodal stresses |
 
+mod bodies;
 mod cached;
+mod elements;
 pub mod step;
-pub use step::StepLoad;
 
 use crate::assembly::{self, UpperCsc};
-use crate::case::{Case, TractionKind};
+use crate::case::Case;
 use crate::condense::Condensed;
-use crate::dofs::{DofMap, SupportSpec};
-use crate::elasticity::{self, Material};
+use crate::dofs::DofMap;
+use crate::elasticity::Material;
+use crate::error::ModelError;
 use crate::la::{PartialSymbolic, SaddleSymbolic};
-use crate::loads::{EdgeOrientation, Traction};
-use crate::mesh::{Mesh, check};
+use crate::mesh::Mesh;
+use bodies::Prepared;
 use std::time::Instant;
-
-/// Anything that stops a model from being built or solved.
-#[derive(Debug, thiserror::Error)]
-pub enum ModelError {
-    #[error(transparent)]
-    MeshRead(#[from] crate::mesh::gmsh::MeshReadError),
-    #[error(transparent)]
-    MeshCheck(#[from] crate::mesh::check::MeshCheckError),
-    #[error("{path}: {source}")]
-    Dof {
-        path: String,
-        source: crate::dofs::DofError,
-    },
-    #[error("{path}: {source}")]
-    Edge {
-        path: String,
-        source: crate::loads::DanglingEdge,
-    },
-    #[error(transparent)]
-    Factor(#[from] crate::la::FactorError),
-    #[error("{path}: {source}")]
-    Contact {
-        path: String,
-        source: crate::contact::PairError,
-    },
-    #[error("contact.friction: {0}")]
-    Friction(#[from] crate::friction::FrictionError),
-}
 
 /// Wall time of each phase, seconds.
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -225,7 +207,10 @@ impl Model {
         Self::build_on(case, mesh, None, timings, gap)
     }
 
-    /// [`Model::from_mesh`] with the model cache and the bytes of the mesh file, if any.
+    /// [`Model::from_mesh`] with the model cache and the bytes of the mesh file, if any: the
+    /// parts of the model on its mesh ([`bodies::prepare`]), its linear algebra (restored from
+    /// the cache on a hit, else assembled, analysed and factorised, and on a miss written to
+    /// the cache while the run goes on), its friction law and condensed contact loads.
     fn build_on(
         case: &Case,
         mesh: Mesh,
@@ -240,201 +225,43 @@ impl Model {
         // (`la::factor_parallelism`); with them the results do not depend on the thread
         // count (`tests/determinism.rs`).
         faer::set_global_parallelism(faer::Par::Seq);
-        let path = mesh.source.display().to_string();
-        // Each group with the case key that names it, for the messages.
-        let (named_bodies, named_curves) = case.named_groups();
-        check::check_named(&mesh, &named_bodies, &named_curves)?;
-        let curves = boundary_groups(case);
-        crate::trace::mark("mesh checked");
-
-        let (elems, elem_body) = body_elements(case, &mesh);
-        let active = active_nodes(&mesh, &elems);
-        let tris: Vec<usize> = elems.iter().map(|(e, _)| *e).collect();
-        let orient = EdgeOrientation::for_groups(&mesh, &tris, &curves);
-        // Every boundary group must lie on the active bodies.
-        for name in &curves {
-            let g = mesh.group(name).expect("checked");
-            for &l in &g.elements {
-                orient
-                    .oriented_coords(&mesh, l, name)
-                    .map_err(|source| ModelError::Edge {
-                        path: path.clone(),
-                        source,
-                    })?;
-            }
-        }
-
-        // Contact: candidate zone and mortar operator, whose nodes are retained.
-        crate::trace::mark("orientation");
-        let t = Instant::now();
-        let pair = contact_pair(case, &mesh, &orient, gap, &path)?;
-        timings.pair = t.elapsed().as_secs_f64();
-        crate::trace::mark("contact pair");
-        let retained = retained_nodes(pair.as_ref());
-        let e_star = pair
-            .as_ref()
-            .map(|p| pair_e_star(case, &mesh, &orient, &elems, &elem_body, p));
-
-        let (dofs, pilot_nodes) = number_dofs(case, &mesh, &active, &retained, &path)?;
-        let pilot_separation = pilot_nodes
-            .as_ref()
-            .zip(pair.as_ref())
-            .and_then(|(pn, p)| pilot_separation(&mesh, &elems, &elem_body, pn, p, &dofs));
-        // The pilot's DOFs are grounded: the body it drives may be held by nothing else.
-        let mut grounded: Vec<usize> = dofs
-            .pilot
-            .map(|p| p.iter().map(|d| d - dofs.n_interior).collect())
-            .unwrap_or_default();
-        if !retained.is_empty() {
-            grounded.extend(anchors_of_floating_bodies(
-                &mesh,
-                &elems,
-                &elem_body,
-                case.bodies.len(),
-                &dofs,
-                &retained,
-            ));
-        }
-        let y = pair
-            .as_ref()
-            .map(|p| crate::contact::ConstraintRows::new(p, &dofs, &grounded));
-        // The order of the constraint rows in the saddle-point factorisation (large contact
-        // zones: the one whose trailing block is also a Cholesky factor of leading sets).
-        let row_order = y
-            .as_ref()
-            .filter(|y| y.rows.len() >= crate::contact::solver::PREFIX_FROM)
-            .map(|y| crate::contact::solver::prefix_order(&y.gap0, y.rows.len()));
-        crate::trace::mark("pair, dofs");
-        let t = Instant::now();
-        let f_traction = traction_forces(case, &mesh, &orient, &dofs);
-        let t_traction = t.elapsed().as_secs_f64();
+        let mut parts = bodies::prepare(case, &mesh, gap)?;
+        timings.pair = parts.t_pair;
 
         // The model cache: the linear algebra of an earlier build of the same model, if any.
-        let sizes = cached::Sizes {
-            contact: pair.is_some(),
-            n_free: dofs.n_free(),
-            n_interior: dofs.n_interior,
-            n_retained: dofs.n_retained,
-            m: y.as_ref().map_or(0, |y| y.rows.len()),
-            row_order: row_order.clone(),
-        };
-        let t = Instant::now();
-        let mut lookup = cached::Lookup::None;
-        if let Some((store, bytes)) = cache {
-            lookup = cached::lookup(
-                store,
-                case,
-                bytes,
-                pair.as_ref().map(|p| p.candidate_gap),
-                &sizes,
-                &grounded,
-            );
-        }
-        let analyse_s = match &lookup {
-            cached::Lookup::Hit(r) => r.analyse_s,
-            _ => 0.0,
-        };
-        timings.cache = t.elapsed().as_secs_f64() - analyse_s;
+        let (sizes, lookup) = look_up(case, cache, &parts, timings);
         let mut cache_report = lookup.report();
-
-        let mut factor_flops = None;
-        let (condensed, contact, f_prescribed, stiffness_nonzeros, w0_cached, pending) =
-            match lookup {
-                cached::Lookup::Hit(r) => {
-                    let r = *r;
-                    timings.assemble = t_traction;
-                    timings.analyse = r.analyse_s;
-                    let t = Instant::now();
-                    let (w, prefix) = (r.w, r.prefix);
-                    let contact = pair.zip(y).map(|(p, y)| {
-                        crate::contact::ContactModel::with_w(
-                            p,
-                            y,
-                            dofs.pilot.is_some(),
-                            &r.condensed,
-                            e_star.expect("with pair"),
-                            w.expect("a contact model's entry holds W"),
-                            prefix,
-                        )
-                    });
-                    timings.condense = t.elapsed().as_secs_f64();
-                    (
-                        r.condensed,
-                        contact,
-                        r.f_prescribed,
-                        r.stiffness_nonzeros,
-                        r.w0,
-                        None,
-                    )
-                }
-                other => {
-                    let t0 = Instant::now();
-                    let mut k = UpperCsc::pattern(&mesh, &elems, &dofs);
-                    let t_pattern = t0.elapsed().as_secs_f64();
-                    crate::trace::mark("pattern");
-                    // The analysis needs the pattern only: the values are assembled alongside
-                    // it, on the cores that its sequential parts (the top separators of the
-                    // ordering, faer's symbolic factorisation) leave idle.
-                    let mut values = std::mem::take(&mut k.values);
-                    let t_join = Instant::now();
-                    let (analysed, (f_prescribed, t_values)) = rayon::join(
-                        || {
-                            let t = Instant::now();
-                            let s = analyse(&k, &dofs, y.as_ref(), row_order.as_deref());
-                            (s, t.elapsed().as_secs_f64())
-                        },
-                        || {
-                            let t = Instant::now();
-                            let f = assembly::assemble_values(
-                                &mesh,
-                                &elems,
-                                &dofs,
-                                (&k.col_ptr, &k.row_idx),
-                                &mut values,
-                            );
-                            crate::trace::mark("assembled");
-                            (f, t.elapsed().as_secs_f64())
-                        },
-                    );
-                    k.values = values;
-                    let t_joined = t_join.elapsed().as_secs_f64();
-                    let (symbolic, t_analyse) = analysed;
-                    if let Ok(Analysis::Saddle(s, _)) = &symbolic {
-                        let (k, coupling, constraint_block) = s.flops();
-                        factor_flops = Some(FactorFlops {
-                            k,
-                            coupling,
-                            constraint_block,
-                        });
-                    }
-                    timings.assemble = t_pattern + t_values + t_traction;
-                    timings.analyse = t_analyse;
-                    let nnz = k.row_idx.len();
-                    // A miss: the entry's file takes the factor's values as they are computed.
-                    let entry_to = match (&other, cache) {
-                        (cached::Lookup::Miss(p), Some((store, _))) => Some((store, p.key)),
-                        _ => None,
-                    };
-                    let (condensed, contact, ordering, draft) = factorise(
-                        &mut k,
-                        &dofs,
-                        &grounded,
-                        pair.zip(y),
-                        e_star,
-                        (symbolic?, row_order),
-                        entry_to,
-                        timings,
-                    )?;
-                    // The pattern, the assembly and analysis together, the factorisation.
-                    timings.build_span = t_pattern + t_joined + timings.factorise + t_traction;
-                    let pending = match other {
-                        cached::Lookup::Miss(p) => Some((p, ordering, k, draft)),
-                        _ => None,
-                    };
-                    (condensed, contact, f_prescribed, nnz, None, pending)
-                }
-            };
+        let la = match lookup {
+            cached::Lookup::Hit(r) => restored(*r, &mut parts, timings),
+            other => {
+                let miss = match (other, cache) {
+                    (cached::Lookup::Miss(p), Some((store, _))) => Some((store, p)),
+                    _ => None,
+                };
+                assembled(&mesh, &mut parts, miss, timings)?
+            }
+        };
         crate::trace::mark("factorised");
+        let Prepared {
+            elems,
+            elem_body,
+            active,
+            dofs,
+            grounded,
+            e_star,
+            pilot_separation,
+            f_traction,
+            ..
+        } = parts;
+        let LinearAlgebra {
+            condensed,
+            contact,
+            f_prescribed,
+            stiffness_nonzeros,
+            factor_flops,
+            w0_cached,
+            pending,
+        } = la;
         let contact = contact.map(|mut c| {
             c.system.floating_pilot = pilot_separation.is_some();
             c
@@ -469,12 +296,12 @@ impl Model {
 
         // A miss: write the entry while the run goes on.
         let cache_job = match (cache, pending) {
-            (Some((store, _)), Some((p, ordering, k, draft))) => {
+            (Some((store, _)), Some(m)) => {
                 let t = Instant::now();
                 let entry = cached::entry(cached::Built {
                     sizes: &sizes,
-                    ordering,
-                    k,
+                    ordering: m.ordering,
+                    k: m.k,
                     nnz: stiffness_nonzeros,
                     grounded: &grounded,
                     condensed: &condensed,
@@ -483,8 +310,9 @@ impl Model {
                     f_prescribed: &f_prescribed,
                     f_traction: &f_traction,
                     contact_w0: &contact_w0,
-                    draft,
+                    draft: m.draft,
                 });
+                let p = m.pending;
                 let (report, job) = store.write_in_background(p.key, entry, p.status, p.note);
                 timings.cache += t.elapsed().as_secs_f64();
                 cache_report = Some(report);
@@ -530,181 +358,180 @@ impl Model {
             (self.mesh.diameter(), e_max)
         })
     }
+}
 
-    /// The displacements of element `i` (of `self.elems`) from the free solution `u`: the same
-    /// numbers as [`DofMap::element_displacement`], read through a table of where each is
-    /// (an index into `u`, or into the prescribed values past `u`'s length, or none) built at
-    /// the first call: 48 bytes per element read in order, instead of each node's two DOFs
-    /// (32 bytes) looked up in a table the size of the mesh, which was a tenth of the work of
-    /// the output writer and the summary on L5.
-    pub fn element_u(&self, i: usize, u: &[f64]) -> [f64; 12] {
-        let table = self.element_dof_table();
-        let n_free = self.dofs.n_free();
-        table[i].map(|k| {
-            let k = k as usize;
-            if k < n_free {
-                u[k]
-            } else {
-                self.dofs.prescribed.get(k - n_free).copied().unwrap_or(0.0)
-            }
-        })
+/// A model's linear algebra: restored from the model cache ([`restored`]) or built
+/// ([`assembled`]).
+struct LinearAlgebra {
+    condensed: Condensed,
+    contact: Option<crate::contact::ContactModel>,
+    f_prescribed: Vec<f64>,
+    stiffness_nonzeros: usize,
+    factor_flops: Option<FactorFlops>,
+    /// A hit's condensed contact loads: (traction forces, their `w0`, `w0` of the prescribed
+    /// displacements).
+    w0_cached: Option<(Vec<f64>, Vec<f64>, Vec<f64>)>,
+    /// A miss: what its cache entry is written from.
+    pending: Option<Missed>,
+}
+
+/// What a miss's cache entry is written from, besides the model: the entry's key and status,
+/// the ordering of the analysis, the stiffness's pattern and the entry's draft file.
+struct Missed {
+    pending: cached::Pending,
+    ordering: Vec<usize>,
+    k: UpperCsc,
+    draft: Option<crate::cache::DraftFile>,
+}
+
+/// The sizes of the model and what the cache has for it (`cached::Lookup::None` without a
+/// cache). Records the `cache` timing (less the analysis a hit redoes).
+fn look_up(
+    case: &Case,
+    cache: Option<(&crate::cache::Store, &[u8])>,
+    parts: &Prepared,
+    timings: &mut Timings,
+) -> (cached::Sizes, cached::Lookup) {
+    let (dofs, y) = (&parts.dofs, &parts.y);
+    let sizes = cached::Sizes {
+        contact: parts.pair.is_some(),
+        n_free: dofs.n_free(),
+        n_interior: dofs.n_interior,
+        n_retained: dofs.n_retained,
+        m: y.as_ref().map_or(0, |y| y.rows.len()),
+        row_order: parts.row_order.clone(),
+    };
+    let t = Instant::now();
+    let mut lookup = cached::Lookup::None;
+    if let Some((store, bytes)) = cache {
+        lookup = cached::lookup(
+            store,
+            case,
+            bytes,
+            parts.pair.as_ref().map(|p| p.candidate_gap),
+            &sizes,
+            &parts.grounded,
+        );
     }
+    let analyse_s = match &lookup {
+        cached::Lookup::Hit(r) => r.analyse_s,
+        _ => 0.0,
+    };
+    timings.cache = t.elapsed().as_secs_f64() - analyse_s;
+    (sizes, lookup)
+}
 
-    /// The fields `us` (of the free DOFs) interleaved for the loops that run across several
-    /// fields at once: `[d][j]` is field `j` at the DOF `d` of [`Model::element_dof_table`]
-    /// (the free DOFs, then the prescribed values), one cache line per DOF for all of them;
-    /// the lanes past `us` are zero.
-    pub fn interleave<const R: usize>(&self, us: &[&[f64]]) -> Vec<[f64; R]> {
-        let n_free = self.dofs.n_free();
-        let mut uu: Vec<[f64; R]> = Vec::with_capacity(n_free + self.dofs.prescribed.len());
-        for d in 0..n_free {
-            uu.push(std::array::from_fn(|j| us.get(j).map_or(0.0, |u| u[d])));
-        }
-        uu.extend(self.dofs.prescribed.iter().map(|&p| [p; R]));
-        uu
+/// The linear algebra of a cache hit `r`, with the contact model of the pair of `parts` built
+/// on its Delassus operator.
+fn restored(r: cached::Restored, parts: &mut Prepared, timings: &mut Timings) -> LinearAlgebra {
+    timings.assemble = parts.t_traction;
+    timings.analyse = r.analyse_s;
+    let t = Instant::now();
+    let (w, prefix) = (r.w, r.prefix);
+    let contact = parts.pair.take().zip(parts.y.take()).map(|(p, y)| {
+        crate::contact::ContactModel::with_w(
+            p,
+            y,
+            parts.dofs.pilot.is_some(),
+            &r.condensed,
+            parts.e_star.expect("with pair"),
+            w.expect("a contact model's entry holds W"),
+            prefix,
+        )
+    });
+    timings.condense = t.elapsed().as_secs_f64();
+    LinearAlgebra {
+        condensed: r.condensed,
+        contact,
+        f_prescribed: r.f_prescribed,
+        stiffness_nonzeros: r.stiffness_nonzeros,
+        factor_flops: None,
+        w0_cached: r.w0,
+        pending: None,
     }
+}
 
-    /// [`Model::element_u`] of interleaved fields ([`Model::interleave`]) for an element's
-    /// row `dofs` of [`Model::element_dof_table`] (taken once by the caller's loop: asked for
-    /// per element it cost the loop a sixth): `[k][j]` is DOF `k` of field `j`.
-    #[inline(always)]
-    pub fn element_u_lanes<const R: usize>(dofs: &[u32; 12], uu: &[[f64; R]]) -> [[f64; R]; 12] {
-        std::array::from_fn(|k| uu.get(dofs[k] as usize).copied().unwrap_or([0.0; R]))
-    }
-
-    /// Where each DOF of each element is (of `self.elems`): its index among the free DOFs
-    /// (below [`DofMap::n_free`]), `n_free` plus its index among the prescribed ones, or
-    /// `u32::MAX` for none.
-    pub fn element_dof_table(&self) -> &[[u32; 12]] {
-        // Built on the calling thread: a rayon task waiting for this initialisation (the
-        // writer's and the driver's threads both compute stresses at the end of a run) must
-        // not be the one that would have to run part of it.
-        self.elem_dofs.get_or_init(|| {
-            use crate::dofs::Dof;
-            let n_free = self.dofs.n_free();
-            assert!(
-                n_free + self.dofs.prescribed.len() < u32::MAX as usize,
-                "DOF indices fit 32 bits"
-            );
-            self.elems
-                .iter()
-                .map(|(e, _)| {
-                    let nodes = &self.mesh.triangles[*e].nodes;
-                    std::array::from_fn(|k| match self.dofs.node[nodes[k / 2]][k % 2] {
-                        Dof::Free(i) => i as u32,
-                        Dof::Fixed(q) => (n_free + q) as u32,
-                        Dof::Unused => u32::MAX,
-                    })
-                })
-                .collect()
-        })
-    }
-
-    /// [`Model::nodal_stresses`] of several fields, up to four at a time in one pass over the
-    /// elements on the calling thread (each element's gradients mapped once for them): the
-    /// same bits as one by one.
-    pub fn nodal_stresses_many(&self, us: &[&[f64]]) -> Vec<Vec<[f64; 4]>> {
-        let mut out = Vec::with_capacity(us.len());
-        for group in us.chunks(4) {
-            match group.len() {
-                1 => out.push(self.nodal_stresses(group[0], false)),
-                2 => out.extend(self.nodal_stresses_lanes::<2>(group)),
-                _ => out.extend(self.nodal_stresses_lanes::<4>(group)),
-            }
-        }
-        out
-    }
-
-    /// [`Model::nodal_stresses_many`] of at most `R` fields (the lanes past them zero).
-    fn nodal_stresses_lanes<const R: usize>(&self, us: &[&[f64]]) -> Vec<Vec<[f64; 4]>> {
-        #[cfg(target_arch = "x86_64")]
-        if crate::la::simd::avx2() {
-            // SAFETY: the processor has AVX2 (checked at run time).
-            return unsafe { self.nodal_stresses_lanes_avx2::<R>(us) };
-        }
-        self.nodal_stresses_lanes_body::<R>(us)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn nodal_stresses_lanes_avx2<const R: usize>(
-        &self,
-        us: &[&[f64]],
-    ) -> Vec<Vec<[f64; 4]>> {
-        self.nodal_stresses_lanes_body::<R>(us)
-    }
-
-    #[inline(always)]
-    fn nodal_stresses_lanes_body<const R: usize>(&self, us: &[&[f64]]) -> Vec<Vec<[f64; 4]>> {
-        let d3 = elasticity::stress_point_gradients();
-        let uu = self.interleave::<R>(us);
-        let table = self.element_dof_table();
-        let mut acc = vec![[[0.0; R]; 4]; self.mesh.nodes.len()];
-        let mut count = vec![0u32; self.mesh.nodes.len()];
-        for (i, (e, mat)) in self.elems.iter().enumerate() {
-            let ue = Model::element_u_lanes(&table[i], &uu);
-            let s = elasticity::nodal_stress_lanes(&self.mesh.tri_coords(*e), &ue, mat, &d3);
-            for (a, &n) in self.mesh.triangles[*e].nodes.iter().enumerate() {
-                for c in 0..4 {
-                    for j in 0..R {
-                        acc[n][c][j] += s[a][c][j];
-                    }
-                }
-                count[n] += 1;
-            }
-        }
-        (0..us.len())
-            .map(|j| {
-                acc.iter()
-                    .zip(&count)
-                    .map(|(a, &c)| {
-                        std::array::from_fn(|i| if c > 0 { a[i][j] / c as f64 } else { a[i][j] })
-                    })
-                    .collect()
+/// The linear algebra built: the stiffness's pattern, its values assembled alongside the
+/// symbolic analysis, the factorisation and the contact model of the pair of `parts`
+/// ([`factorise`]). On a cache miss (`miss`: the store and the entry to write), the factor's
+/// values are computed in the entry's file where that can be done safely.
+fn assembled(
+    mesh: &Mesh,
+    parts: &mut Prepared,
+    miss: Option<(&crate::cache::Store, cached::Pending)>,
+    timings: &mut Timings,
+) -> Result<LinearAlgebra, ModelError> {
+    let (elems, dofs) = (&parts.elems, &parts.dofs);
+    let t0 = Instant::now();
+    let mut k = UpperCsc::pattern(mesh, elems, dofs);
+    let t_pattern = t0.elapsed().as_secs_f64();
+    crate::trace::mark("pattern");
+    // The analysis needs the pattern only: the values are assembled alongside it, on the cores
+    // that its sequential parts (the top separators of the ordering, faer's symbolic
+    // factorisation) leave idle.
+    let mut values = std::mem::take(&mut k.values);
+    let t_join = Instant::now();
+    let (analysed, (f_prescribed, t_values)) = rayon::join(
+        || {
+            let t = Instant::now();
+            let s = analyse(&k, dofs, parts.y.as_ref(), parts.row_order.as_deref());
+            (s, t.elapsed().as_secs_f64())
+        },
+        || {
+            let t = Instant::now();
+            let f =
+                assembly::assemble_values(mesh, elems, dofs, (&k.col_ptr, &k.row_idx), &mut values);
+            crate::trace::mark("assembled");
+            (f, t.elapsed().as_secs_f64())
+        },
+    );
+    k.values = values;
+    let t_joined = t_join.elapsed().as_secs_f64();
+    let (symbolic, t_analyse) = analysed;
+    let factor_flops = match &symbolic {
+        Ok(Analysis::Saddle(s, _)) => {
+            let (k, coupling, constraint_block) = s.flops();
+            Some(FactorFlops {
+                k,
+                coupling,
+                constraint_block,
             })
-            .collect()
-    }
-
-    /// Nodal stresses (σxx, σyy, σxy, σzz), averaged over the elements around each node; the
-    /// elements on rayon's threads with `parallel`, else on the calling thread (the same bits).
-    pub fn nodal_stresses(&self, u: &[f64], parallel: bool) -> Vec<[f64; 4]> {
-        use rayon::prelude::*;
-        let d3 = elasticity::stress_point_gradients();
-        let one = |(i, (e, mat)): (usize, &(usize, Material))| {
-            let ue: [f64; 12] = self.element_u(i, u);
-            elasticity::nodal_stress_at(&self.mesh.tri_coords(*e), &ue, mat, &d3)
-        };
-        let mut acc = vec![[0.0; 4]; self.mesh.nodes.len()];
-        let mut count = vec![0u32; self.mesh.nodes.len()];
-        // Each element's stresses added to its nodes, in the order of the elements.
-        let mut add = |e: usize, s: &[[f64; 4]; 6]| {
-            for (a, &n) in self.mesh.triangles[e].nodes.iter().enumerate() {
-                for i in 0..4 {
-                    acc[n][i] += s[a][i];
-                }
-                count[n] += 1;
-            }
-        };
-        if parallel {
-            let per_elem: Vec<[[f64; 4]; 6]> = self.elems.par_iter().enumerate().map(one).collect();
-            for ((e, _), s) in self.elems.iter().zip(&per_elem) {
-                add(*e, s);
-            }
-        } else {
-            // No array of the elements' stresses: 8.6 MB of fresh memory per step at L5.
-            for (i, em) in self.elems.iter().enumerate() {
-                add(em.0, &one((i, em)));
-            }
         }
-        for (a, c) in acc.iter_mut().zip(&count) {
-            if *c > 0 {
-                for v in a.iter_mut() {
-                    *v /= *c as f64;
-                }
-            }
-        }
-        acc
-    }
+        _ => None,
+    };
+    timings.assemble = t_pattern + t_values + parts.t_traction;
+    timings.analyse = t_analyse;
+    let nnz = k.row_idx.len();
+    // A miss: the entry's file takes the factor's values as they are computed.
+    let entry_to = miss.as_ref().map(|(store, p)| (*store, p.key));
+    let pair = parts.pair.take().zip(parts.y.take());
+    let row_order = parts.row_order.take();
+    let (condensed, contact, ordering, draft) = factorise(
+        &mut k,
+        &parts.dofs,
+        &parts.grounded,
+        pair,
+        parts.e_star,
+        (symbolic?, row_order),
+        entry_to,
+        timings,
+    )?;
+    // The pattern, the assembly and analysis together, the factorisation.
+    timings.build_span = t_pattern + t_joined + timings.factorise + parts.t_traction;
+    Ok(LinearAlgebra {
+        condensed,
+        contact,
+        f_prescribed,
+        stiffness_nonzeros: nnz,
+        factor_flops,
+        w0_cached: None,
+        pending: miss.map(|(_, pending)| Missed {
+            pending,
+            ordering,
+            k,
+            draft,
+        }),
+    })
 }
 
 /// The symbolic analysis of a model's matrix: of `K̂` with the retained DOFs last (no contact),
@@ -785,7 +612,9 @@ fn factorise(
             // A new cache entry's file, whose pages the factorisation writes its values in
             // (none where that cannot be done safely: the values go to memory, and the entry's
             // writer copies them as for a model without contact).
-            let draft = entry_to.and_then(|(store, key)| store.draft(key, symbolic.len_val()));
+            let draft = entry_to.and_then(|(store, key)| {
+                store.draft(key, symbolic.len_val())
+            });
             let (draft, dest) = match draft {
                 Some(d) => (
                     Some(d.file),
@@ -815,339 +644,4 @@ fn factorise(
         }
         _ => unreachable!("analysed with the same constraint rows"),
     }
-}
-
-/// The curve groups the case names: supports, tractions, the pilot, then the contact pair
-/// (slave, master).
-fn boundary_groups(case: &Case) -> Vec<&str> {
-    let mut curves: Vec<&str> = case.supports.iter().map(|s| s.group.as_str()).collect();
-    curves.extend(case.tractions.iter().map(|t| t.group.as_str()));
-    if let Some(p) = &case.pilot {
-        curves.push(&p.group);
-    }
-    if let Some(c) = &case.contact {
-        curves.push(&c.slave);
-        curves.push(&c.master);
-    }
-    curves
-}
-
-/// The active triangles with their materials, body by body, and the body index of each.
-fn body_elements(case: &Case, mesh: &Mesh) -> (Vec<(usize, Material)>, Vec<usize>) {
-    let mut elems = Vec::new();
-    let mut elem_body = Vec::new();
-    for (bi, b) in case.bodies.iter().enumerate() {
-        let mat = Material { e: b.e, nu: b.nu };
-        for &e in &mesh.group(&b.group).expect("checked").elements {
-            elems.push((e, mat));
-            elem_body.push(bi);
-        }
-    }
-    (elems, elem_body)
-}
-
-/// Flags per mesh node: used by some active triangle.
-fn active_nodes(mesh: &Mesh, elems: &[(usize, Material)]) -> Vec<bool> {
-    let mut active = vec![false; mesh.nodes.len()];
-    for (e, _) in elems {
-        for &n in &mesh.triangles[*e].nodes {
-            active[n] = true;
-        }
-    }
-    active
-}
-
-/// The contact pair of the case (candidate zone and mortar operator), if it has a `contact`.
-fn contact_pair(
-    case: &Case,
-    mesh: &Mesh,
-    orient: &EdgeOrientation,
-    gap: Option<f64>,
-    path: &str,
-) -> Result<Option<crate::contact::Pair>, ModelError> {
-    let Some(cs) = &case.contact else {
-        return Ok(None);
-    };
-    let perr = |source| ModelError::Contact {
-        path: path.to_string(),
-        source,
-    };
-    let slave = crate::contact::oriented_edges(mesh, orient, &cs.slave).map_err(perr)?;
-    let master = crate::contact::oriented_edges(mesh, orient, &cs.master).map_err(perr)?;
-    let g = gap
-        .or(cs.candidate_gap)
-        .unwrap_or_else(|| crate::contact::default_candidate_gap(mesh, &slave));
-    Ok(Some(
-        crate::contact::build_pair(
-            mesh,
-            &cs.slave,
-            &cs.master,
-            &slave,
-            &master,
-            g,
-            cs.normal == crate::case::NormalKind::Common,
-        )
-        .map_err(perr)?,
-    ))
-}
-
-/// The nodes kept in the condensed system: those of the candidate zone and of the mortar rows,
-/// each once, in order of first appearance.
-fn retained_nodes(pair: Option<&crate::contact::Pair>) -> Vec<usize> {
-    let mut retained: Vec<usize> = Vec::new();
-    if let Some(p) = pair {
-        let m = &p.mortar;
-        retained.extend(p.zone_edges.iter().flatten());
-        retained.extend(m.g_rows.iter().chain(&m.t_rows).flatten().map(|(n, _)| *n));
-        let mut seen = std::collections::HashSet::new();
-        retained.retain(|n| seen.insert(*n));
-    }
-    retained
-}
-
-/// The composite modulus E* of the pair, from the slave body (of the first zone edge) and the
-/// master body (adjacent to the first master edge; the slave body if there is none).
-fn pair_e_star(
-    case: &Case,
-    mesh: &Mesh,
-    orient: &EdgeOrientation,
-    elems: &[(usize, Material)],
-    elem_body: &[usize],
-    p: &crate::contact::Pair,
-) -> f64 {
-    let mut tri_body = vec![usize::MAX; mesh.triangles.len()];
-    for ((e, _), &b) in elems.iter().zip(elem_body) {
-        tri_body[*e] = b;
-    }
-    let body_of = |e: &[usize; 3]| {
-        orient
-            .edge_triangle(e[0], e[1])
-            .map(|t| tri_body[t])
-            .expect("oriented edge")
-    };
-    let mb = p.mortar.master_nodes.first().and_then(|_| {
-        // The master body: the triangle adjacent to any master edge of the case group.
-        let cs = case.contact.as_ref().expect("pair implies contact");
-        crate::contact::oriented_edges(mesh, orient, &cs.master)
-            .ok()
-            .and_then(|v| v.first().map(body_of))
-    });
-    let sb = body_of(&p.zone_edges[0]);
-    let inv = |b: usize| (1.0 - case.bodies[b].nu.powi(2)) / case.bodies[b].e;
-    1.0 / (inv(sb) + inv(mb.unwrap_or(sb)))
-}
-
-/// Numbers the DOFs (supports, pilot, retained nodes); also returns the pilot's nodes.
-fn number_dofs(
-    case: &Case,
-    mesh: &Mesh,
-    active: &[bool],
-    retained: &[usize],
-    path: &str,
-) -> Result<(DofMap, Option<Vec<usize>>), ModelError> {
-    let support_nodes: Vec<Vec<usize>> = case
-        .supports
-        .iter()
-        .map(|s| mesh.group_nodes(mesh.group(&s.group).expect("checked")))
-        .collect();
-    let supports: Vec<SupportSpec> = case
-        .supports
-        .iter()
-        .zip(&support_nodes)
-        .map(|(s, nodes)| SupportSpec {
-            group: &s.group,
-            nodes,
-            value: [s.ux, s.uy],
-        })
-        .collect();
-    let pilot_nodes = case
-        .pilot
-        .as_ref()
-        .map(|p| mesh.group_nodes(mesh.group(&p.group).expect("checked")));
-    let dofs = DofMap::build(
-        &mesh.node_tags,
-        active,
-        &supports,
-        case.pilot
-            .as_ref()
-            .map(|p| p.group.as_str())
-            .zip(pilot_nodes.as_deref()),
-        retained,
-    )
-    .map_err(|source| ModelError::Dof {
-        path: path.to_string(),
-        source,
-    })?;
-    Ok((dofs, pilot_nodes))
-}
-
-/// [`Model::pilot_separation`]: when the pilot (on nodes `pn`) drives the slave or master body
-/// and no support holds that body, the body and the direction of pilot motion that opens the
-/// contact (the slave's outward normal at the first touch, reversed for the slave body).
-fn pilot_separation(
-    mesh: &Mesh,
-    elems: &[(usize, Material)],
-    elem_body: &[usize],
-    pn: &[usize],
-    p: &crate::contact::Pair,
-    dofs: &DofMap,
-) -> Option<(usize, [f64; 2])> {
-    let node_body = node_bodies(mesh, elems, elem_body);
-    let bp = node_body[*pn.first()?];
-    let sb = node_body[p.zone_edges[0][0]];
-    let mb = node_body[*p.mortar.master_nodes.first()?];
-    let n = p.first_touch;
-    match held_by_supports(mesh, &node_body, bp, dofs).0 {
-        true => None,
-        false if bp == mb => Some((bp, n)),
-        false if bp == sb => Some((bp, [-n[0], -n[1]])),
-        false => None,
-    }
-}
-
-/// Nodal forces (free DOFs) of the case's tractions at scale 1, edge by edge.
-fn traction_forces(case: &Case, mesh: &Mesh, orient: &EdgeOrientation, dofs: &DofMap) -> Vec<f64> {
-    let mut f_traction = vec![0.0; dofs.n_free()];
-    for spec in &case.tractions {
-        let load = match spec.kind {
-            TractionKind::Uniform => Traction::Uniform {
-                tx: spec.tx.unwrap_or(0.0),
-                ty: spec.ty.unwrap_or(0.0),
-            },
-            TractionKind::Pressure => Traction::Pressure {
-                p: spec.p.expect("validated"),
-            },
-            TractionKind::Hertz => Traction::Hertz {
-                p0: spec.p0.expect("validated"),
-                a: spec.a.expect("validated"),
-                x0: spec.x0.unwrap_or(0.0),
-            },
-        };
-        let g = mesh.group(&spec.group).expect("checked");
-        for &l in &g.elements {
-            let nodes = orient.oriented_nodes(mesh, l).expect("checked above");
-            let xe = nodes.map(|n| mesh.nodes[n]);
-            let fe = crate::loads::edge_forces(&xe, &load);
-            for a in 0..3 {
-                for c in 0..2 {
-                    if let crate::dofs::Dof::Free(i) = dofs.node[nodes[a]][c] {
-                        f_traction[i] += fe[a][c];
-                    }
-                }
-            }
-        }
-    }
-    f_traction
-}
-
-/// The body of each node (`usize::MAX` for nodes of no active triangle).
-fn node_bodies(mesh: &Mesh, elems: &[(usize, Material)], elem_body: &[usize]) -> Vec<usize> {
-    let mut node_body = vec![usize::MAX; mesh.nodes.len()];
-    for ((e, _), &b) in elems.iter().zip(elem_body) {
-        for &n in &mesh.triangles[*e].nodes {
-            node_body[n] = b;
-        }
-    }
-    node_body
-}
-
-/// Whether the supports of body `b` hold its three rigid modes (1,0), (0,1), (−y, x) (their
-/// restriction to the body's fixed DOFs has rank 3), and whether the pilot drives the body.
-fn held_by_supports(mesh: &Mesh, node_body: &[usize], b: usize, dofs: &DofMap) -> (bool, bool) {
-    use crate::dofs::Dof;
-    let pilot_dof = |d: Dof| matches!((d, dofs.pilot), (Dof::Free(i), Some(p)) if p.contains(&i));
-    let mut g = [[0.0f64; 3]; 3];
-    let mut piloted = false;
-    let mut scale: f64 = 0.0;
-    for (n, &nb) in node_body.iter().enumerate() {
-        if nb != b {
-            continue;
-        }
-        let x = mesh.nodes[n];
-        scale = scale.max(x[0].abs()).max(x[1].abs());
-        for c in 0..2 {
-            let d = dofs.node[n][c];
-            if pilot_dof(d) {
-                piloted = true;
-            }
-            if let Dof::Fixed(_) = d {
-                let row = if c == 0 {
-                    [1.0, 0.0, -x[1]]
-                } else {
-                    [0.0, 1.0, x[0]]
-                };
-                for i in 0..3 {
-                    for j in 0..3 {
-                        g[i][j] += row[i] * row[j];
-                    }
-                }
-            }
-        }
-    }
-    // Normalise the rotation column so the determinant test is scale-free.
-    let s = scale.max(f64::MIN_POSITIVE);
-    for i in 0..3 {
-        g[i][2] /= s;
-        g[2][i] /= s;
-    }
-    let det = g[0][0] * (g[1][1] * g[2][2] - g[1][2] * g[2][1])
-        - g[0][1] * (g[1][0] * g[2][2] - g[1][2] * g[2][0])
-        + g[0][2] * (g[1][0] * g[2][1] - g[1][1] * g[2][0]);
-    let tr = g[0][0] + g[1][1] + g[2][2];
-    (det > 1e-8 * tr.powi(3), piloted)
-}
-
-/// Retained DOFs (as retained indices) to ground in bodies that no support or pilot holds, so
-/// that a body held by contact alone still has a factorisable stiffness. Each such body gets
-/// three anchors on its contact nodes (both components of one node, one component of the node
-/// farthest from it), which the contact solver drives at zero force.
-fn anchors_of_floating_bodies(
-    mesh: &Mesh,
-    elems: &[(usize, Material)],
-    elem_body: &[usize],
-    nbodies: usize,
-    dofs: &DofMap,
-    retained: &[usize],
-) -> Vec<usize> {
-    use crate::dofs::Dof;
-    let node_body = node_bodies(mesh, elems, elem_body);
-    let mut out = Vec::new();
-    for b in 0..nbodies {
-        let (held, piloted) = held_by_supports(mesh, &node_body, b, dofs);
-        if piloted || held {
-            continue;
-        }
-        let nodes: Vec<usize> = retained
-            .iter()
-            .copied()
-            .filter(|&n| node_body[n] == b)
-            .collect();
-        let free = |n: usize, c: usize| match dofs.node[n][c] {
-            Dof::Free(i) if i >= dofs.n_interior => Some(i - dofs.n_interior),
-            _ => None,
-        };
-        let Some(&a) = nodes
-            .iter()
-            .find(|&&n| free(n, 0).is_some() && free(n, 1).is_some())
-        else {
-            continue;
-        };
-        let xa = mesh.nodes[a];
-        let far = nodes.iter().copied().max_by(|&p, &q| {
-            let d = |n: usize| (mesh.nodes[n][0] - xa[0]).hypot(mesh.nodes[n][1] - xa[1]);
-            d(p).partial_cmp(&d(q)).expect("finite")
-        });
-        out.extend(free(a, 0));
-        out.extend(free(a, 1));
-        if let Some(f) = far.filter(|&f| f != a) {
-            let xf = mesh.nodes[f];
-            let c = if (xf[0] - xa[0]).abs() >= (xf[1] - xa[1]).abs() {
-                1
-            } else {
-                0
-            };
-            out.extend(free(f, c));
-        }
-    }
-    out
 }

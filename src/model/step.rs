@@ -108,23 +108,7 @@ impl Model {
         uu: &[[f64; R]],
         mut each: impl FnMut(usize, &[[f64; R]; 12], &[[f64; R]; 12], f64),
     ) {
-        #[cfg(target_arch = "x86_64")]
-        if crate::la::simd::avx2() {
-            // SAFETY: the processor has AVX2 (checked at run time).
-            return unsafe { self.each_element_forces_avx2(uu, &mut each) };
-        }
         self.each_element_forces_body(uu, &mut each)
-    }
-
-    /// [`Model::each_element_forces`] compiled for AVX2 (the same operations in the same order).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn each_element_forces_avx2<const R: usize>(
-        &self,
-        uu: &[[f64; R]],
-        each: &mut impl FnMut(usize, &[[f64; R]; 12], &[[f64; R]; 12], f64),
-    ) {
-        self.each_element_forces_body(uu, each)
     }
 
     #[inline(always)]

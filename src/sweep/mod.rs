@@ -12,7 +12,8 @@ pub mod parts;
 use crate::case::Case;
 use crate::error::SweepError;
 use crate::model::Model;
-use crate::report::{FrictionSummary, final_checks, friction_summary, judge};
+use crate::record::FrictionSummary;
+use crate::report::{final_checks, friction_summary, judge};
 use crate::run::{LogLevel, simulate};
 use serde::Serialize;
 use serde_json::{Value, json};
@@ -139,7 +140,7 @@ pub fn run(case_path: &Path, sweep_path: &Path, opts: &SweepOptions) -> Result<(
         .iter()
         .map(|f| f.resolve(e_star).map(|l| (l, f.history)))
         .collect::<Result<Vec<_>, _>>()
-        .map_err(crate::model::ModelError::Friction)?;
+        .map_err(crate::error::ModelError::Friction)?;
     if laws.is_empty() {
         let history = case.contact.as_ref().and_then(|c| c.friction.as_ref());
         laws.push((
@@ -276,7 +277,7 @@ pub struct SweepRow {
     pub status: String,
     pub steps: usize,
     pub newton_iterations: usize,
-    /// Factorisations of the contact Newton solves (see [`Summary::lu_factorisations`]).
+    /// Factorisations of the contact Newton solves (see [`crate::report::Summary::lu_factorisations`]).
     pub lu_factorisations: usize,
     pub wall_s: f64,
     /// Stick and transition semi-widths at the last converged step.
@@ -364,7 +365,7 @@ pub fn sweep(
             .iter()
             .enumerate()
             .filter_map(|(k, (_, _, res))| match res {
-                Ok(sim) if sim.equilibrium.is_none() => sim.last_u.as_ref().map(|u| {
+                Ok(sim) => sim.last_u.as_ref().map(|u| {
                     let inp = crate::checks::Input {
                         model,
                         u,
@@ -388,27 +389,32 @@ pub fn sweep(
             .flat_map_iter(crate::checks::equilibrium_many)
             .collect();
         drop(inputs);
+        // Each run's equilibrium check, by its index in `runs`.
+        let mut equilibria: Vec<Option<crate::checks::Check>> = vec![None; runs.len()];
         for (k, check) in ks.into_iter().zip(checked) {
-            if let Ok(sim) = &mut runs[k].2 {
-                sim.equilibrium = Some(check);
-            }
+            equilibria[k] = Some(check);
         }
         crate::trace::mark("sweep: rows' equilibrium");
         runs.into_par_iter()
-            .map(|(row, wall_s, res)| row_of(model, laws, row, wall_s, res))
+            .zip(equilibria)
+            .map(|((row, wall_s, res), equilibrium)| {
+                row_of(model, laws, row, wall_s, res, equilibrium)
+            })
             .try_for_each(on_row)?;
         crate::trace::mark("sweep: rows checked");
     }
     Ok(())
 }
 
-/// The sweep row of one run: its friction figures, self-checks and status.
+/// The sweep row of one run: its friction figures, self-checks and status (`equilibrium`: the
+/// equilibrium check of its last step, computed already).
 fn row_of(
     model: &Model,
     laws: &[(crate::friction::FrictionLaw, crate::friction::History)],
     row: usize,
     wall_s: f64,
     res: Result<crate::driver::Simulation, crate::error::RunError>,
+    equilibrium: Option<crate::checks::Check>,
 ) -> SweepRow {
     let (load_index, index) = (row / laws.len(), row % laws.len());
     let law = &laws[index].0;
@@ -429,7 +435,7 @@ fn row_of(
                 sim.last_scale,
                 &sim.records,
                 friction.as_ref(),
-                sim.equilibrium.take(),
+                equilibrium,
             );
             let (_, status) = judge(
                 sim.failure,

@@ -5,7 +5,7 @@
 //! `sweep.json`, refusing parts of another sweep and reporting rows that no part holds.
 
 use crate::error::SweepError;
-use crate::output::write_atomic;
+use crate::output::atomic::write_atomic;
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use std::io::Write;

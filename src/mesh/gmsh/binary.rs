@@ -8,7 +8,7 @@
 //! points (type 15, skipped), the `$Nodes` section followed by the `$Elements` section and
 //! nothing but white space after it. On anything else it returns `None`, and the caller reads
 //! the file through `mshio` instead, which reports what is wrong with it; the two readers give
-//! the same mesh (`tests::both_readers_give_the_same_mesh`).
+//! the same mesh (`super::tests::both_readers_give_the_same_mesh`).
 
 /// The two sections as read: nodes in file order with their tags, and the element blocks.
 pub(super) struct Body {

@@ -1,15 +1,15 @@
 //! The CSV curves of `stickslip analytic …`: one writer per curve subcommand, each printing a
-//! header row and then one row per point. The arguments are defined in [`super::cli`].
+//! header row and then one row per point. The arguments are defined in [`super::args`].
 
-use super::AnalyticError;
-use super::apparent;
-use super::cattaneo::CattaneoMindlin;
-use super::cli::{
-    ApparentCurveArgs, CliResult, DcmCurveArgs, ImpliedLawArgs, JkrCurveArgs, LawCurveArgs,
-    TractionArgs, csv_opt, given_or_case,
+use super::args::{
+    ApparentCurveArgs, DcmCurveArgs, ImpliedLawArgs, JkrCurveArgs, LawCurveArgs, TractionArgs,
 };
-use super::dcm::{DoubleCm, implied_law_normalized};
-use super::jkr::{Jkr, JkrCurve};
+use super::inputs::{CliResult, given_or_case};
+use crate::analytic::AnalyticError;
+use crate::analytic::apparent;
+use crate::analytic::cattaneo::CattaneoMindlin;
+use crate::analytic::dcm::{DoubleCm, implied_law_normalized};
+use crate::analytic::jkr::{Jkr, JkrCurve};
 use crate::friction::FrictionLaw;
 use std::io::Write;
 
@@ -48,8 +48,8 @@ pub(super) fn dcm_curve(d: &DcmCurveArgs, out: &mut dyn Write) -> CliResult<()> 
             0.5 * (p.c + p.b),
             p.q / (m.fd * m.hertz.p_load),
             match p.branch {
-                super::dcm::Branch::Dcm => "dcm",
-                super::dcm::Branch::CmFs => "cm_fs",
+                crate::analytic::dcm::Branch::Dcm => "dcm",
+                crate::analytic::dcm::Branch::CmFs => "cm_fs",
             },
             p.stable
         )?;
@@ -172,4 +172,9 @@ pub(super) fn apparent_curve(a: &ApparentCurveArgs, out: &mut dyn Write) -> CliR
         )?;
     }
     Ok(())
+}
+
+/// A CSV cell: the number, or empty for `None`.
+fn csv_opt(v: Option<f64>) -> String {
+    v.map(|x| format!("{x}")).unwrap_or_default()
 }

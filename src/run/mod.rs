@@ -1,6 +1,15 @@
 //! The run driver: stages and load steps (with cutbacks and the bracketing of Q_max), one
 //! solve per step on the condensed model ([`crate::model::step`]), the output of every step
 //! ([`crate::output::fields`]) and the report at the end ([`crate::report`]).
+//!
+//! | module | content |
+//! |---|---|
+//! | this file | a run of a case file: the model (rebuilt with a wider contact zone when the contact reaches its rim), the output begun, the steps, the summary |
+//! | `steps` | what each converged step goes through: progress, energy, journal, the writer; the last step's check |
+//! | `progress` | the progress bar or lines |
+
+mod progress;
+mod steps;
 
 use crate::case::Case;
 pub use crate::driver::{
@@ -9,11 +18,13 @@ pub use crate::driver::{
 use crate::energy::EnergyMeter;
 pub use crate::error::RunError;
 use crate::model::Model;
-use crate::output::series::{Background, Series, StepOutput, write_file};
+use crate::output::background::Background;
+use crate::output::series::{Series, write_file};
 use crate::report::{Summary, end_summary, history_csv, print_warnings, summarise};
 use crate::restart::{self, SavedRun};
+use progress::Progress;
 use std::path::{Path, PathBuf};
-use std::sync::mpsc::{Receiver, sync_channel};
+use steps::{StepSink, check_last_step};
 
 /// Options of a run from the command line.
 #[derive(Clone, Debug, Default)]
@@ -168,17 +179,6 @@ fn projected_output_bytes(case: &Case, model: &Model) -> u64 {
     written_steps(case) * step_bytes(model)
 }
 
-/// How many of the case's nominal load steps the load path has covered at `time` (stage index
-/// plus the fraction of that stage).
-fn nominal_steps_done(case: &Case, time: f64) -> f64 {
-    let mut done = 0.0;
-    for (i, st) in case.stages.iter().enumerate() {
-        let frac = (time - i as f64).clamp(0.0, 1.0);
-        done += frac * st.steps as f64;
-    }
-    done
-}
-
 /// Steps through the stages of a built model, writing output to `out_dir`; `id` is the run's
 /// identity ([`restart::run_id`]), which its restart states carry.
 pub fn run_model(
@@ -190,26 +190,7 @@ pub fn run_model(
     resume: Option<SavedRun>,
     id: String,
 ) -> Result<Summary, RunError> {
-    if let (Some(s), Some(cm)) = (&resume, &model.contact)
-        && s.checkpoint
-            .cstate
-            .as_ref()
-            .is_some_and(|st| st.f_n.len() != cm.system.ns)
-    {
-        return Err(RunError::Resume {
-            path: opts
-                .resume
-                .clone()
-                .unwrap_or_default()
-                .display()
-                .to_string(),
-            why: "its contact state does not fit the model built from the case".into(),
-        });
-    }
-    // Loads that no step can carry are refused before anything is written.
-    if resume.is_none() {
-        crate::driver::refuse_unloadable(&model, case, model.friction.as_ref())?;
-    }
+    refuse_before_writing(case, &model, opts, resume.as_ref())?;
     std::fs::create_dir_all(out_dir).map_err(|source| RunError::Write {
         path: out_dir.display().to_string(),
         source,
@@ -219,191 +200,51 @@ pub fn run_model(
         .map(|s| s.to_string_lossy().to_string())
         .unwrap_or("case".into());
     let level = opts.level();
-    let projected = projected_output_bytes(case, &model);
-    if level >= LogLevel::Warn && projected > output_warn_bytes() {
-        eprintln!(
-            "warning: this run will write about {} ({projected} bytes) to {} ({} written steps \
-             of about {} each; `output.every` writes fewer, `\"vtu\": false` none)",
-            crate::report::human_bytes(projected),
-            out_dir.display(),
-            written_steps(case),
-            crate::report::human_bytes(step_bytes(&model)),
-        );
-    }
+    warn_of_large_output(case, &model, out_dir, level);
     let progress = Progress::new(case, level);
     let law = model.friction.clone();
-    let mut series = Series::new(&model, out_dir, &stem, case.output.compress);
-    series.contact_csv = case.output.contact_csv;
-    let mut energy = case.tracks_energy().then(|| EnergyMeter::new(&model));
-    let candidate_gap = model.contact.as_ref().map(|c| c.pair.candidate_gap);
-    let mut from = None;
-    // The journal of step records beside the states (see `crate::restart`): begun afresh, or
-    // with the records of the state a resumed run goes on from.
     let journal_path = out_dir.join(restart::JOURNAL);
-    let mut journal = if case.output.vtu {
-        let start = resume.as_ref().map_or("", |s| s.journal.as_str());
-        let journal_error = |source| RunError::Write {
-            path: journal_path.display().to_string(),
-            source,
-        };
-        let mut f = std::fs::File::create(&journal_path).map_err(journal_error)?;
-        std::io::Write::write_all(&mut f, start.as_bytes()).map_err(journal_error)?;
-        Some(f)
-    } else {
-        None
-    };
-    if let Some(s) = resume {
-        series = series.with_entries(s.pvd);
-        if let Some(saved) = s.energy {
-            energy = Some(EnergyMeter::resume(&model, saved, &s.checkpoint));
-        }
-        from = Some(s.checkpoint);
-    }
-    // States go with the written steps: none when nothing is written.
-    let restart = Restart {
-        every: case.output.vtu.then_some(case.output.every),
-        from,
-    };
+    let (series, mut energy, journal, restart) =
+        begin_output(case, &model, out_dir, &stem, &journal_path, resume)?;
     // The steps are written on a thread of their own while the next ones are solved.
     let (summarised, history, solve_s, t_write, t_wait, bracket_attempts) =
         std::thread::scope(|scope| {
             let mut writer = Background::spawn(scope, series);
-            // The last converged step not yet written (`output.every` > 1).
-            let mut unwritten: Option<StepOutput> = None;
-            // The last step and where its recovered displacements come from (runs with contact:
-            // the writer recovers them with the steps it writes and sends them back).
-            let mut last_u: Option<(usize, Receiver<Vec<f64>>)> = None;
-            let mut on_step = |ev: &StepEvent| {
-                progress.step(ev);
-                if let Some(m) = energy.as_mut() {
-                    m.step(&model, ev);
-                }
-                // Written: the nominal steps `output.every` picks and the last one, and with
-                // `output.substeps` the sub-steps of cutbacks between them too.
-                let picked = ev.last
-                    || match ev.nominal {
-                        Some(k) => k.is_multiple_of(case.output.every),
-                        None => case.output.substeps,
-                    };
-                if let Some(f) = journal.as_mut() {
-                    let line = restart::JournalLine {
-                        record: ev.record.clone(),
-                        energy: energy.as_ref().and_then(|m| m.last_row().cloned()),
-                        written: picked,
-                    };
-                    let text = restart::journal_text(std::slice::from_ref(&line));
-                    let journal_error = |source| RunError::Write {
-                        path: journal_path.display().to_string(),
-                        source,
-                    };
-                    std::io::Write::write_all(f, text.as_bytes()).map_err(journal_error)?;
-                    // On the device before the state that counts this line.
-                    if ev.checkpoint.is_some() {
-                        f.sync_data().map_err(journal_error)?;
-                    }
-                }
-                if !case.output.vtu {
-                    if picked
-                        && case.output.contact_csv
-                        && let Some(st) = ev.contact
-                    {
-                        crate::output::series::write_contact_csv(&model, out_dir, ev.step, st)?;
-                    }
-                    return Ok(());
-                }
-                // A write that failed stops the run at its next step.
-                writer.check()?;
-                // The last step's displacements are recovered once, by the writer (with the steps
-                // queued before it), for its output and for the checks of the summary.
-                let reply = match (ev.u, ev.contact) {
-                    (None, Some(_)) if ev.last => {
-                        let (tx, rx) = sync_channel(1);
-                        last_u = Some((ev.step, rx));
-                        Some(tx)
-                    }
-                    _ => None,
-                };
-                let out = StepOutput {
-                    reply,
-                    step: ev.step,
-                    time: ev.time,
-                    scale: ev.scale,
-                    u: ev.u.cloned(),
-                    contact: ev.contact.cloned(),
-                    // The state to resume from, written after the step's files.
-                    state: ev.checkpoint.map(|c| SavedRun {
-                        format: restart::FORMAT,
-                        id: id.clone(),
-                        candidate_gap,
-                        checkpoint: c.clone(),
-                        steps: ev.step,
-                        pvd: Vec::new(),
-                        journal: String::new(),
-                        energy: energy.as_ref().map(EnergyMeter::saved),
-                    }),
-                };
-                if picked {
-                    unwritten = None;
-                    writer.send(out)
-                } else {
-                    // Kept so that a run that stops early still writes its last converged state.
-                    unwritten = Some(out);
-                    Ok(())
-                }
+            let mut sink = StepSink {
+                case,
+                model: &model,
+                out_dir,
+                id: &id,
+                candidate_gap: model.contact.as_ref().map(|c| c.pair.candidate_gap),
+                progress: &progress,
+                energy: &mut energy,
+                journal,
+                journal_path: &journal_path,
+                unwritten: None,
+                last_u: None,
             };
             crate::trace::mark("simulate");
-            let sim = simulate_with(&model, case, law.as_ref(), level, &mut on_step, restart);
-            let sim = match sim {
+            let sim = simulate_with(
+                &model,
+                case,
+                law.as_ref(),
+                level,
+                &mut |ev| sink.step(ev, &mut writer),
+                restart,
+            );
+            let mut sim = match sim {
                 Ok(sim) => sim,
                 // The steps handed to the writer are written first; its error came first.
                 Err(e) => return Err(writer.finish().err().unwrap_or(e)),
             };
-            if let Some(w) = unwritten.take()
+            if let Some(w) = sink.unwritten.take()
                 && sim.failure.is_some()
             {
                 writer.send(w)?;
             }
             // The steps still waiting for the writer: this thread prepares them from the last
-            // while the writer finishes those it has; then the summary and its checks. The
-            // summary's equilibrium check of the last step starts as soon as its field is
-            // recovered, on a thread of its own: it fills the time the two output threads wait
-            // for the device's writes and for each other at the end, instead of following them.
-            let mut sim = sim;
-            match last_u {
-                Some((step, rx)) if sim.last_u.is_none() && sim.records.len() == step => {
-                    let (sim_ref, model_ref) = (&sim, &model);
-                    let (u, equilibrium) = std::thread::scope(|s| {
-                        let checking = std::thread::Builder::new()
-                            .name("stickslip-check".into())
-                            .spawn_scoped(s, move || {
-                                // None when the writer stopped on an error first (reported by
-                                // `finish` below).
-                                let u = rx.recv().ok()?;
-                                let e = crate::checks::equilibrium(&crate::checks::Input {
-                                    model: model_ref,
-                                    u: &u,
-                                    scale: sim_ref.last_scale,
-                                    state: sim_ref.last_state.as_ref(),
-                                    records: &sim_ref.records,
-                                    friction: None,
-                                    equilibrium: None,
-                                });
-                                Some((u, e))
-                            })
-                            .expect("the check thread starts");
-                        let _ = writer.help();
-                        checking
-                            .join()
-                            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
-                            .unzip()
-                    });
-                    sim.last_u = u;
-                    sim.equilibrium = equilibrium;
-                }
-                _ => {
-                    let _ = writer.help();
-                }
-            }
+            // while the writer finishes those it has; then the summary and its checks.
+            let equilibrium = check_last_step(&model, &mut sim, sink.last_u, &mut writer);
             // Every field is recovered, or its recovery has started (the writer took the steps
             // left): the factor's values are freed once those end, on a thread of their own, while
             // the output and the summary are finished (hundreds of MB, which would otherwise be
@@ -417,7 +258,7 @@ pub fn run_model(
             let solve_s = sim.solve_s;
             let bracket_attempts = sim.bracket_attempts;
             let history = history_csv(&sim.records);
-            let summarised = summarise(&model, case, case_path, out_dir, sim);
+            let summarised = summarise(&model, case, case_path, out_dir, sim, equilibrium);
             crate::trace::mark("summarised");
             let (t_write, t_wait) = writer.finish()?;
             crate::trace::mark("writer done");
@@ -468,6 +309,104 @@ pub fn run_model(
     Ok(summary)
 }
 
+/// Refuses, before anything is written, a resumed state whose contact does not fit the model
+/// built from the case, and (a run from the start) the loads that no step can carry.
+fn refuse_before_writing(
+    case: &Case,
+    model: &Model,
+    opts: &RunOptions,
+    resume: Option<&SavedRun>,
+) -> Result<(), RunError> {
+    if let (Some(s), Some(cm)) = (resume, &model.contact)
+        && s.checkpoint
+            .cstate
+            .as_ref()
+            .is_some_and(|st| st.f_n.len() != cm.system.ns)
+    {
+        return Err(RunError::Resume {
+            path: opts
+                .resume
+                .clone()
+                .unwrap_or_default()
+                .display()
+                .to_string(),
+            why: "its contact state does not fit the model built from the case".into(),
+        });
+    }
+    if resume.is_none() {
+        crate::driver::refuse_unloadable(model, case, model.friction.as_ref())?;
+    }
+    Ok(())
+}
+
+/// Warns (at `level` warn and above) when the run is projected to write more than
+/// [`output_warn_bytes`].
+fn warn_of_large_output(case: &Case, model: &Model, out_dir: &Path, level: LogLevel) {
+    let projected = projected_output_bytes(case, model);
+    if level >= LogLevel::Warn && projected > output_warn_bytes() {
+        eprintln!(
+            "warning: this run will write about {} ({projected} bytes) to {} ({} written steps \
+             of about {} each; `output.every` writes fewer, `\"vtu\": false` none)",
+            crate::report::human_bytes(projected),
+            out_dir.display(),
+            written_steps(case),
+            crate::report::human_bytes(step_bytes(model)),
+        );
+    }
+}
+
+/// The output a run begins with: the series of its steps (going on with a resumed run's `.pvd`
+/// entries), its energy meter (resumed with the state), the journal of step records beside the
+/// states (see `crate::restart`: begun afresh, or with the records of the state a resumed run
+/// goes on from; none when no `.vtu` is written), and the driver's checkpoints (with the
+/// written steps: none when nothing is written) and where it resumes.
+fn begin_output<'a>(
+    case: &Case,
+    model: &'a Model,
+    out_dir: &'a Path,
+    stem: &'a str,
+    journal_path: &Path,
+    resume: Option<SavedRun>,
+) -> Result<BegunOutput<'a>, RunError> {
+    let mut series = Series::new(model, out_dir, stem, case.output.compress);
+    series.contact_csv = case.output.contact_csv;
+    let mut energy = case.tracks_energy().then(|| EnergyMeter::new(model));
+    let mut from = None;
+    let journal = if case.output.vtu {
+        let start = resume.as_ref().map_or("", |s| s.journal.as_str());
+        let journal_error = |source| RunError::Write {
+            path: journal_path.display().to_string(),
+            source,
+        };
+        let mut f = std::fs::File::create(journal_path).map_err(journal_error)?;
+        std::io::Write::write_all(&mut f, start.as_bytes()).map_err(journal_error)?;
+        Some(f)
+    } else {
+        None
+    };
+    if let Some(s) = resume {
+        series = series.with_entries(s.pvd);
+        if let Some(saved) = s.energy {
+            energy = Some(EnergyMeter::resume(model, saved, &s.checkpoint));
+        }
+        from = Some(s.checkpoint);
+    }
+    let restart = Restart {
+        every: case.output.vtu.then_some(case.output.every),
+        from,
+    };
+    Ok((series, energy, journal, restart))
+}
+
+/// What [`begin_output`] gives: the series, the energy meter, the journal and the driver's
+/// checkpoints.
+type BegunOutput<'a> = (
+    Series<'a>,
+    Option<EnergyMeter>,
+    Option<std::fs::File>,
+    Restart,
+);
+
 /// Returns the heap's free pages to the system (glibc keeps the memory of freed blocks
 /// mapped, hundreds of MB after a run's build, which the process's exit would otherwise unmap
 /// after the output: 6 ms on Fig. 2 at L5, measured from the `run returned` trace mark to the
@@ -497,74 +436,6 @@ fn free_when_unshared<T>(mut v: std::sync::Arc<T>) {
                 v = shared;
                 std::thread::sleep(std::time::Duration::from_millis(1));
             }
-        }
-    }
-}
-
-/// The progress shown while a run steps: a bar on a terminal, a line per step otherwise.
-struct Progress<'a> {
-    case: &'a Case,
-    level: LogLevel,
-    total: usize,
-    bar: Option<indicatif::ProgressBar>,
-}
-
-impl<'a> Progress<'a> {
-    fn new(case: &'a Case, level: LogLevel) -> Self {
-        let total = case.total_steps();
-        let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
-        let bar = (level >= LogLevel::Info && tty).then(|| {
-            let b = indicatif::ProgressBar::new(total as u64);
-            b.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "{bar:30} {pos}/{len} steps {elapsed} {msg}",
-                )
-                .expect("valid template"),
-            );
-            b
-        });
-        Progress {
-            case,
-            level,
-            total,
-            bar,
-        }
-    }
-
-    fn step(&self, ev: &StepEvent) {
-        crate::trace::mark(format_args!("step {}", ev.step));
-        let r = ev.record;
-        let msg = match (r.pilot, r.contact) {
-            (Some(p), Some(c)) => format!(
-                "Q = {:.5}, P = {:.5}, a = {:.5}, c = {:.5}, {} its",
-                p.fx, -p.fy, c.a, c.c, r.iterations
-            ),
-            (Some(p), None) => format!(
-                "pilot u = ({:.4e}, {:.4e}), F = ({:.5}, {:.5})",
-                p.ux, p.uy, p.fx, p.fy
-            ),
-            _ => format!("traction scale {:.4}", r.traction_scale),
-        };
-        // Progress in nominal steps: cutbacks add steps, so the count is not the position.
-        let done = nominal_steps_done(self.case, ev.time);
-        match &self.bar {
-            Some(b) => {
-                b.set_position(done.round() as u64);
-                b.set_message(msg);
-            }
-            None if self.level >= LogLevel::Info => eprintln!(
-                "step {} (stage {}, {:.0} % of the load path): {msg}",
-                ev.step,
-                r.stage,
-                100.0 * done / self.total as f64
-            ),
-            None => {}
-        }
-    }
-
-    fn finish(&self) {
-        if let Some(b) = &self.bar {
-            b.finish_and_clear();
         }
     }
 }
