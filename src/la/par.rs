@@ -13,72 +13,33 @@ pub fn factor_parallelism() -> faer::Par {
 }
 
 /// An `nrows × ncols` matrix whose column `j` is written by `fill(j, column)` over zeros, the
-/// columns on rayon's threads with `parallel`, else on the calling thread. Fresh memory costs a
-/// page fault per 4 KiB at its first write, which dominates filling it, and faer's `Mat::zeros`
-/// and `Mat::from_fn` write on the calling thread alone (the Delassus operator's two m × m
-/// arrays: 130 MB each at L7). Sequential where a rayon worker must not wait (a sweep's block
-/// store).
+/// columns on rayon's threads with `parallel` (in groups of at least 32), else on the calling
+/// thread. Sequential where a rayon worker must not wait (a sweep's block store).
 pub fn mat_filled(
     nrows: usize,
     ncols: usize,
     parallel: bool,
     fill: impl Fn(usize, &mut [f64]) + Sync,
 ) -> faer::Mat<f64> {
-    mat_filled_in(None, nrows, ncols, parallel, fill)
-}
-
-/// [`mat_filled`] in `spare` when it is given with those dimensions (an array made earlier,
-/// its pages already in place: [`Spare`]), else in fresh memory. The same values.
-pub fn mat_filled_in(
-    spare: Option<faer::Mat<f64>>,
-    nrows: usize,
-    ncols: usize,
-    parallel: bool,
-    fill: impl Fn(usize, &mut [f64]) + Sync,
-) -> faer::Mat<f64> {
     use rayon::prelude::*;
-    let mut a = match spare {
-        Some(a) if a.nrows() == nrows && a.ncols() == ncols && a.col_stride() >= 0 => a,
-        _ => faer::Mat::<f64>::with_capacity(nrows, ncols),
-    };
-    let cols = SharedMat::of(&mut a);
-    let one = |j: usize| {
-        // SAFETY: column j lies within the capacity, and only this call touches it; its
-        // elements are zeroed before the slice is made, so the slice reads initialised values.
-        fill(j, unsafe { cols.zeroed_column(j, nrows) })
+    let mut a = faer::Mat::<f64>::zeros(nrows, ncols);
+    let one = |(j, mut col): (usize, faer::ColMut<'_, f64>)| {
+        let col = col
+            .as_mut()
+            .try_as_col_major_mut()
+            .expect("the columns of a Mat are contiguous");
+        fill(j, col.as_slice_mut())
     };
     if parallel {
-        (0..ncols).into_par_iter().with_min_len(32).for_each(one);
+        a.as_mut()
+            .par_col_iter_mut()
+            .enumerate()
+            .with_min_len(32)
+            .for_each(one);
     } else {
-        (0..ncols).for_each(one);
+        a.as_mut().col_iter_mut().enumerate().for_each(one);
     }
-    // SAFETY: within the capacity, and every element is written above.
-    unsafe { a.set_dims(nrows, ncols) };
     a
-}
-
-/// Two `m × m` arrays for the Delassus operator `W` and its Cholesky factor `C`, made (their
-/// pages faulted in) on a core that the symbolic analysis leaves idle, for the first numeric
-/// factorisation on that analysis to fill instead of fresh memory: at L7 each is 130 MB, whose
-/// first touch took 0.1–0.15 s of the factorisation and of the condensation.
-#[derive(Clone, Default)]
-pub struct Spare(pub(crate) std::sync::Arc<std::sync::Mutex<[Option<faer::Mat<f64>>; 2]>>);
-
-impl Spare {
-    /// Both arrays of order `m`, made now (zeros) on rayon's threads.
-    pub(crate) fn made(m: usize) -> Spare {
-        let make = || mat_filled(m, m, true, |_, _| {});
-        let (w, c) = rayon::join(make, make);
-        Spare(std::sync::Arc::new(std::sync::Mutex::new([
-            Some(w),
-            Some(c),
-        ])))
-    }
-
-    /// Takes array `k` (0: `W`, 1: `C`), if it is still there.
-    pub(crate) fn take(&self, k: usize) -> Option<faer::Mat<f64>> {
-        self.0.lock().unwrap_or_else(|p| p.into_inner())[k].take()
-    }
 }
 
 /// A vector of `n` zeros written by rayon's threads: its pages are faulted in on all cores.
@@ -123,18 +84,6 @@ impl SharedMat {
     pub(crate) unsafe fn set(&self, i: usize, j: usize, v: f64) {
         unsafe { *self.ptr.add(i + j * self.stride) = v }
     }
-
-    /// The first `len` elements of column `j`, zeroed first (they may be uninitialised).
-    /// SAFETY: `len` ≤ the stride, column `j` within the allocation, and no other task touches
-    /// it while the slice lives.
-    #[allow(clippy::mut_from_ref)]
-    pub(crate) unsafe fn zeroed_column(&self, j: usize, len: usize) -> &mut [f64] {
-        unsafe {
-            let p = self.ptr.add(j * self.stride);
-            std::ptr::write_bytes(p, 0, len);
-            std::slice::from_raw_parts_mut(p, len)
-        }
-    }
 }
 
 /// Side of the tiles in which [`for_tiles_below`] visits an `m × m` array.
@@ -157,9 +106,4 @@ pub(crate) fn for_tiles_below(m: usize, visit: impl Fn(usize, usize) + Sync) {
             }
         }
     });
-}
-
-/// [`mat_filled`] of zeros, on rayon's threads.
-pub fn zeros_in_parallel(nrows: usize, ncols: usize) -> faer::Mat<f64> {
-    mat_filled(nrows, ncols, true, |_, _| {})
 }

@@ -790,17 +790,11 @@ impl Schur {
         }
         let m = a_mm.nrows();
         let view = a_mm.rb();
-        self.w = Some(crate::la::par::mat_filled_in(
-            self.spare.take(),
-            m,
-            m,
-            true,
-            |j, col| {
-                for i in j..m {
-                    col[i] = -view[(i, j)];
-                }
-            },
-        ));
+        self.w = Some(crate::la::par::mat_filled(m, m, true, |j, col| {
+            for i in j..m {
+                col[i] = -view[(i, j)];
+            }
+        }));
         ldlt(a_mm, par, stack).map_err(|i| i + kk)
     }
 }

@@ -612,9 +612,7 @@ fn factorise(
             // A new cache entry's file, whose pages the factorisation writes its values in
             // (none where that cannot be done safely: the values go to memory, and the entry's
             // writer copies them as for a model without contact).
-            let draft = entry_to.and_then(|(store, key)| {
-                store.draft(key, symbolic.len_val())
-            });
+            let draft = entry_to.and_then(|(store, key)| store.draft(key, symbolic.len_val()));
             let (draft, dest) = match draft {
                 Some(d) => (
                     Some(d.file),

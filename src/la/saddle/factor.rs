@@ -4,9 +4,7 @@
 use super::layout::{Node, Supernodes, sweep_columns};
 use crate::la::base::FactorError;
 use crate::la::dense::copy_trailing;
-use crate::la::par::{
-    SharedMat, TILE, factor_parallelism, for_tiles_below, mat_filled_in, zeros_in_parallel,
-};
+use crate::la::par::{SharedMat, TILE, factor_parallelism, for_tiles_below, mat_filled};
 use crate::la::values::SharedValues;
 
 /// A numeric `L D Lᵀ` factorisation of a saddle-point matrix (see [`SaddleSymbolic`]).
@@ -23,8 +21,6 @@ pub struct SaddleFactor {
     /// `W = Y K̂⁻¹ Yᵀ` (its lower triangle) as the factorisation found it, the Schur
     /// complement of the constraint block, until [`Self::delassus`] takes it.
     pub(super) schur: std::sync::Mutex<Option<faer::Mat<f64>>>,
-    /// The array of `C` made during the analysis ([`Spare`]), until [`Self::delassus`] fills it.
-    pub(super) spare_c: std::sync::Mutex<Option<faer::Mat<f64>>>,
     /// Wall time of the constraint block within the numeric factorisation (its updates, the
     /// elimination of the top separator's columns from it and its `L D Lᵀ`), seconds; zero
     /// where it was not timed apart (faer's loop, a factor from the model cache).
@@ -53,7 +49,6 @@ impl SaddleFactor {
             m,
             plan: std::sync::OnceLock::new(),
             schur: std::sync::Mutex::new(None),
-            spare_c: std::sync::Mutex::new(None),
             constraint_block_s: 0.0,
         })
     }
@@ -188,13 +183,6 @@ impl SaddleFactor {
         use faer::linalg::matmul::triangular::{BlockStructure, matmul};
         let m = self.m;
         let schur = self.schur.lock().unwrap_or_else(|p| p.into_inner()).take();
-        // The array made for `C` during the analysis: filled below, or freed with this call on
-        // the paths that do not need it (not kept by the factor for the rest of the run).
-        let spare_c = self
-            .spare_c
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .take();
         if let Some(mut w) = schur {
             // W as the factorisation found it (its lower triangle): no product.
             let values = self.values();
@@ -211,7 +199,7 @@ impl SaddleFactor {
             }
             // The factorisation copies W only where the constraint columns end the root.
             let c = self
-                .c_from_root(&values, spare_c)
+                .c_from_root(&values)
                 .expect("W copied from the root supernode");
             return Some((w, Some(c)));
         }
@@ -236,7 +224,7 @@ impl SaddleFactor {
             }
         });
         crate::trace::mark("delassus: L D");
-        let mut w = zeros_in_parallel(m, m);
+        let mut w = faer::Mat::zeros(m, m);
         matmul(
             w.as_mut(),
             BlockStructure::TriangularLower,
@@ -266,7 +254,7 @@ impl SaddleFactor {
     fn l_mm(&self) -> faer::Mat<f64> {
         let (n, m) = (self.n, self.m);
         let values = self.values();
-        let mut l = zeros_in_parallel(m, m);
+        let mut l = faer::Mat::zeros(m, m);
         for s in 0..self.layout.n_supernodes() {
             let node = self.layout.node(s, &values);
             copy_trailing(&mut l, n, node.start, node.ncols, node.pattern, |i, j| {
@@ -278,8 +266,8 @@ impl SaddleFactor {
 
     /// `C = L_MM (−D_MM)^½` (lower, as [`cholesky_of_w`] gives it, the same bits) read
     /// straight from the last supernode when it holds every constraint column (as on every
-    /// mesh of the ladder), else `None`; in `spare` when given ([`Spare`]).
-    fn c_from_root(&self, values: &[f64], spare: Option<faer::Mat<f64>>) -> Option<faer::Mat<f64>> {
+    /// mesh of the ladder), else `None`.
+    fn c_from_root(&self, values: &[f64]) -> Option<faer::Mat<f64>> {
         let (n, m) = (self.n, self.m);
         let node = self
             .layout
@@ -288,7 +276,7 @@ impl SaddleFactor {
             return None;
         }
         let kk = n - node.start;
-        Some(mat_filled_in(spare, m, m, true, |j, col| {
+        Some(mat_filled(m, m, true, |j, col| {
             let sj = (-node.at(kk + j, kk + j)).sqrt();
             col[j] = sj;
             for i in j + 1..m {

@@ -10,4 +10,4 @@ mod tests;
 
 pub use factor::SaddleFactor;
 pub use layout::Supernodes;
-pub use symbolic::{SPARE_FROM, SaddleSymbolic, tree_scheduled};
+pub use symbolic::{SaddleSymbolic, tree_scheduled};

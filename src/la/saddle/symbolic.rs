@@ -4,7 +4,7 @@ use super::factor::SaddleFactor;
 use super::layout::Supernodes;
 use crate::la::base::{FactorError, supernodal, sym};
 use crate::la::ordering::ordering_choice;
-use crate::la::par::{Spare, factor_parallelism, vec_in_parallel};
+use crate::la::par::{factor_parallelism, vec_in_parallel};
 use crate::la::values::{FactorValues, SharedValues, ValuesDestination};
 use faer::Side;
 use faer::sparse::SparseColMatRef;
@@ -17,9 +17,6 @@ pub fn tree_scheduled() -> bool {
     crate::la::supernodal::available()
         && std::env::var("STICKSLIP_FACTOR").map_or(true, |v| v != "faer")
 }
-
-/// Constraint rows from which [`Spare`] arrays are made during the analysis (8 MB each).
-pub const SPARE_FROM: usize = 1024;
 
 /// The sparsity pattern and symbolic analysis of the saddle-point matrix of a contact model,
 /// ```text
@@ -41,8 +38,6 @@ pub struct SaddleSymbolic {
     pub(super) row_idx: Vec<usize>,
     pub(super) n: usize,
     pub(super) m: usize,
-    /// The arrays of the first factorisation's `W` and `C`, made during the analysis.
-    pub(super) spare: Spare,
 }
 
 /// A fill-reducing ordering of the leading `n_lead` columns of an upper CSC pattern (which
@@ -141,24 +136,11 @@ impl SaddleSymbolic {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
-        // faer's symbolic analysis runs on one thread: the arrays of `W` and `C` are made on
-        // the other meanwhile (none below `SPARE_FROM` constraint rows).
-        let (inner, spare) = rayon::join(
-            || {
-                cholesky::factorize_symbolic_cholesky(
-                    sym(size, &cp, &ri),
-                    Side::Upper,
-                    cholesky::SymmetricOrdering::Custom(perm),
-                    params,
-                )
-            },
-            || {
-                if m >= SPARE_FROM {
-                    Spare::made(m)
-                } else {
-                    Spare::default()
-                }
-            },
+        let inner = cholesky::factorize_symbolic_cholesky(
+            sym(size, &cp, &ri),
+            Side::Upper,
+            cholesky::SymmetricOrdering::Custom(perm),
+            params,
         );
         let inner = inner.map_err(|e| match e {
             faer::sparse::FaerError::IndexOverflow => FactorError::IndexOverflow { n: size },
@@ -176,7 +158,6 @@ impl SaddleSymbolic {
             row_idx: ri,
             n,
             m,
-            spare,
         })
     }
 
@@ -315,9 +296,8 @@ impl SaddleSymbolic {
                 rows: &self.layout.rows,
                 val_ptr: &self.layout.val_ptr,
             };
-            schur =
-                crate::la::supernodal::factorise(&st, lower, l, par, Some((n, self.spare.take(0))))
-                    .map_err(|pivot| FactorError::NotPositiveDefinite { pivot, n })?;
+            schur = crate::la::supernodal::factorise(&st, lower, l, par, Some((n, None)))
+                .map_err(|pivot| FactorError::NotPositiveDefinite { pivot, n })?;
             if schur.is_none() {
                 crate::trace::mark("factor: constraint block not in the root (W by the product)");
             }
@@ -355,7 +335,6 @@ impl SaddleSymbolic {
             None => FactorValues::Owned(owned),
         };
         let mut f = self.from_values(std::sync::Arc::new(values))?;
-        f.spare_c = std::sync::Mutex::new(self.spare.take(1));
         if let Some((w, seconds)) = schur {
             f.constraint_block_s = seconds;
             *f.schur.lock().unwrap_or_else(|p| p.into_inner()) = Some(w);
