@@ -1,7 +1,6 @@
 //! The numeric `L D Lᵀ` of a supernodal analysis (the saddle-point matrix of a contact model),
-//! left-looking as faer's `factorize_supernodal_numeric_ldlt`, with the same kernels and the
-//! same order of operations on every value, but scheduled on rayon's threads by the
-//! elimination tree:
+//! left-looking as faer's `factorize_supernodal_numeric_ldlt`, with faer's public dense
+//! kernels, scheduled on rayon's threads by the elimination tree:
 //!
 //! * **independent subtrees** of the supernodal elimination tree (a nested-dissection
 //!   ordering gives many) are factorised at the same time, each on one thread with sequential
@@ -14,21 +13,20 @@
 //!
 //! faer's own loop takes the supernodes one after the other and parallelises inside each
 //! update: on the L5–L7 ladders most updates are small (supernodes of 2–7 columns), and the
-//! synchronisation of each of them cost more than it gained (the 2-thread numeric
-//! factorisation at L5 was no faster than the 1-thread one, with ~180 000 futex calls at L7).
+//! synchronisation of each costs more than it gains (the 2-thread numeric factorisation at L5
+//! is no faster than the 1-thread one, with ~180 000 futex calls at L7).
 //!
-//! The values are those of faer's loop with sequential kernels, bit for bit, in every supernode
-//! but the root; where the root holds the constraint block (a saddle-point matrix), it is
-//! factorised in two stages (the top separator's columns, then the block, with `W` copied in
-//! between), which is faer's one dense `L D Lᵀ` within round-off
-//! (`linsolve::tests::the_tree_scheduled_factor_is_faers_below_the_root_bit_for_bit`). The
-//! values do not depend on the number of threads: the partition into subtrees is fixed by the
-//! tree alone, every update is a sequential kernel call on its own columns, and the dense
-//! kernels split their work without changing any sum's order.
-//!
-//! Only on x86-64 with AVX2 and FMA, where faer's gather-scatter update kernel (the
-//! `private-gemm-x86` crate, pinned to faer's version) is what faer itself runs
-//! ([`available`]); elsewhere the caller keeps faer's loop.
+//! The update of supernode `s` by a descendant `d` ([`update`]) is a dense product
+//! `L_d,rows D_d L_d,colsᵀ` formed in a per-thread scratch block by `faer::linalg::matmul`
+//! and subtracted from `L_s` at the local rows and columns of `d`'s pattern. The factor is
+//! faer's within round-off: both solve the saddle-point system to a backward error near the
+//! unit round-off (`linsolve::tests::the_tree_scheduled_factor_is_faers_within_round_off_and_the_same_on_any_threads`).
+//! Where the root holds the constraint block (a saddle-point matrix), it is factorised in two
+//! stages (the top separator's columns, then the block, with `W` copied in between). The
+//! values do not depend on the number of threads: the partition into subtrees and the
+//! column ranges of the split updates are fixed by the tree alone, every update is a
+//! sequential product of a shape fixed by the tree, and the dense kernels split their work
+//! without changing any sum's order.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::reborrow::{Reborrow, ReborrowMut};
@@ -198,31 +196,6 @@ impl Structure<'_> {
     }
 }
 
-/// Whether this machine runs faer's gather-scatter update kernel (x86-64 with AVX2 and FMA),
-/// and so this factorisation.
-pub fn available() -> bool {
-    instruction_set().is_some()
-}
-
-#[cfg(target_arch = "x86_64")]
-fn instruction_set() -> Option<private_gemm_x86::InstrSet> {
-    // The choice faer makes (`linalg::matmul::internal::spicy_matmul`).
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        Some(private_gemm_x86::InstrSet::Avx512)
-    } else if std::arch::is_x86_feature_detected!("avx2")
-        && std::arch::is_x86_feature_detected!("fma")
-    {
-        Some(private_gemm_x86::InstrSet::Avx256)
-    } else {
-        None
-    }
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-fn instruction_set() -> Option<()> {
-    None
-}
-
 /// The elimination tree's schedule: the descendants that update each supernode, the
 /// independent subtrees and the supernodes above them.
 struct Schedule {
@@ -241,6 +214,11 @@ const SPLIT_SHARE: f64 = 1.0 / 16.0;
 
 /// A top supernode's updates are split over its columns from this many columns.
 pub const SPLIT_COLUMNS: usize = 32;
+
+/// A split top supernode's updates are applied in this many ranges of its columns: a fixed
+/// number, so that every update's shape, and with it the order of the sums in faer's product,
+/// does not depend on the number of threads.
+const SPLIT_PARTS: usize = 8;
 
 impl Schedule {
     fn of(st: &Structure) -> Schedule {
@@ -392,26 +370,83 @@ impl Values {
 }
 
 /// One thread's working arrays: the local row of each row of the supernode being factorised,
-/// the index lists of one update and the dense factorisation's scratch.
+/// the scratch of its updates and the dense factorisation's scratch.
 struct Work {
     local: Vec<usize>,
-    row_idx: Vec<usize>,
-    col_idx: Vec<usize>,
+    upd: Scratch,
     mem: MemBuffer,
 }
 
 impl Work {
-    fn new(size: usize, max_cols: usize, par: Par) -> Work {
+    fn new(size: usize, limits: Limits, par: Par) -> Work {
         let req = faer::linalg::cholesky::ldlt::factor::cholesky_in_place_scratch::<f64>(
-            max_cols,
+            limits.cols,
             par,
             Default::default(),
         );
         Work {
             local: vec![usize::MAX; size],
-            row_idx: Vec::new(),
-            col_idx: Vec::new(),
+            upd: Scratch::new(limits),
             mem: MemBuffer::new(req),
+        }
+    }
+}
+
+/// The largest supernode (columns) and the largest pattern (rows below a supernode): the
+/// sizes of the working arrays.
+#[derive(Clone, Copy)]
+struct Limits {
+    cols: usize,
+    rows: usize,
+}
+
+/// Columns of an update's product per block: the product scratch holds `rows × UPDATE_BLOCK`
+/// values.
+const UPDATE_BLOCK: usize = 64;
+
+/// The scratch of one update (sized once, from [`Limits`]): the local rows and columns of `s`
+/// that it writes, `D_d L_d,colsᵀ` for one block of columns, and the product block.
+struct Scratch {
+    row_idx: Vec<usize>,
+    col_idx: Vec<usize>,
+    scaled: Vec<f64>,
+    prod: Vec<f64>,
+}
+
+impl Scratch {
+    fn new(limits: Limits) -> Scratch {
+        let block = UPDATE_BLOCK.min(limits.rows);
+        Scratch {
+            row_idx: Vec::with_capacity(limits.rows),
+            col_idx: Vec::with_capacity(limits.rows),
+            scaled: vec![0.0; limits.cols * block],
+            prod: vec![0.0; limits.rows * block],
+        }
+    }
+}
+
+/// One value per rayon thread, made on its first use there.
+struct PerThread<T>(Vec<std::sync::Mutex<Option<T>>>);
+
+impl<T> PerThread<T> {
+    fn new() -> Self {
+        PerThread(
+            (0..rayon::current_num_threads().max(1))
+                .map(|_| std::sync::Mutex::new(None))
+                .collect(),
+        )
+    }
+
+    /// `f` of this thread's value (made by `make` on first use); of a fresh one should a task
+    /// already hold it (a task here calls nothing that lets rayon start another on its
+    /// thread, so this is not expected).
+    fn with<R>(&self, make: impl FnOnce() -> T, f: impl FnOnce(&mut T) -> R) -> R {
+        use std::sync::TryLockError;
+        let i = rayon::current_thread_index().unwrap_or(0) % self.0.len();
+        match self.0[i].try_lock() {
+            Ok(mut held) => f(held.get_or_insert_with(make)),
+            Err(TryLockError::Poisoned(e)) => f(e.into_inner().get_or_insert_with(make)),
+            Err(TryLockError::WouldBlock) => f(&mut make()),
         }
     }
 }
@@ -427,9 +462,6 @@ impl Work {
 /// that block as its descendants left it, less the elimination of the supernode's own
 /// columns before `n` (a rank update instead of the product `L_MM D_MM L_MMᵀ`), with the
 /// wall time of that block (its updates, the elimination and its `L D Lᵀ`, in seconds).
-///
-/// # Panics
-/// Where [`available`] is false.
 pub fn factorise(
     st: &Structure,
     a: LowerCsc,
@@ -438,10 +470,6 @@ pub fn factorise(
     schur_from: Option<(usize, Option<faer::Mat<f64>>)>,
 ) -> Result<Option<(faer::Mat<f64>, f64)>, usize> {
     use rayon::prelude::*;
-    assert!(
-        available(),
-        "the supernodal update kernel needs AVX2 and FMA"
-    );
     let nsup = st.n_supernodes();
     let size = *st.begin.last().unwrap_or(&0);
     assert_eq!(l.len(), *st.val_ptr.last().unwrap_or(&0));
@@ -449,7 +477,10 @@ pub fn factorise(
     st.check();
     debug_assert!(l.iter().step_by(4096).all(|&x| x == 0.0), "zeros on entry");
     let schedule = Schedule::of(st);
-    let max_cols = (0..nsup).map(|s| st.ncols(s)).max().unwrap_or(0);
+    let limits = Limits {
+        cols: (0..nsup).map(|s| st.ncols(s)).max().unwrap_or(0),
+        rows: (0..nsup).map(|s| st.pattern(s).len()).max().unwrap_or(0),
+    };
     let values = Values {
         ptr: l.as_mut_ptr(),
         len: l.len(),
@@ -470,52 +501,35 @@ pub fn factorise(
         });
     // One set of working arrays per thread that runs a subtree (the row map alone is 8 bytes
     // per row), made on its first subtree.
-    let works: Vec<std::sync::Mutex<Option<Work>>> = (0..rayon::current_num_threads().max(1))
-        .map(|_| std::sync::Mutex::new(None))
-        .collect();
+    let works = PerThread::new();
     // The subtrees, each on one thread; the first failure by supernode is the one reported.
     let failed = schedule
         .subtrees
         .par_iter()
         .map(|nodes| {
-            let i = rayon::current_thread_index().unwrap_or(0) % works.len();
-            // This thread's arrays; fresh ones should it ever run two subtrees at once (a
-            // subtree's work calls nothing that lets rayon start another task on its thread).
-            let mut own;
-            let mut fresh;
-            let slot: &mut Option<Work> = match works[i].try_lock() {
-                Ok(w) => {
-                    own = w;
-                    &mut own
-                }
-                Err(std::sync::TryLockError::Poisoned(e)) => {
-                    own = e.into_inner();
-                    &mut own
-                }
-                Err(std::sync::TryLockError::WouldBlock) => {
-                    fresh = None;
-                    &mut fresh
-                }
-            };
-            let work = slot.get_or_insert_with(|| Work::new(size, max_cols, Par::Seq));
-            for &s in nodes {
-                // SAFETY: this task alone factorises the subtree's supernodes, whose
-                // descendants are in the subtree and earlier in `nodes`.
-                unsafe {
-                    supernode(
-                        st,
-                        Some(&a),
-                        &schedule,
-                        &values,
-                        s,
-                        work,
-                        Par::Seq,
-                        false,
-                        None,
-                    )?
-                };
-            }
-            Ok(())
+            works.with(
+                || Work::new(size, limits, Par::Seq),
+                |work| {
+                    for &s in nodes {
+                        // SAFETY: this task alone factorises the subtree's supernodes, whose
+                        // descendants are in the subtree and earlier in `nodes`.
+                        unsafe {
+                            supernode(
+                                st,
+                                Some(&a),
+                                &schedule,
+                                &values,
+                                s,
+                                work,
+                                Par::Seq,
+                                None,
+                                None,
+                            )?
+                        };
+                    }
+                    Ok(())
+                },
+            )
         })
         .filter_map(Result::err)
         .min();
@@ -528,7 +542,8 @@ pub fn factorise(
         schedule.subtrees.len(),
         schedule.top.len()
     ));
-    let mut work = Work::new(size, max_cols, par);
+    let mut work = Work::new(size, limits, par);
+    let pool = PerThread::new();
     let mut a = Some(a);
     for &s in &schedule.top {
         if schur.as_ref().is_some_and(|w| w.s == s) {
@@ -550,7 +565,7 @@ pub fn factorise(
                 s,
                 &mut work,
                 par,
-                true,
+                Some((&pool, limits)),
                 schur.as_mut().filter(|w| w.s == s),
             )?
         };
@@ -560,7 +575,8 @@ pub fn factorise(
 
 /// Factorises supernode `s`: its columns of `a`, the updates of its descendants in ascending
 /// order, its dense `L D Lᵀ`, the solve of its off-diagonal rows and their scaling by `D⁻¹`.
-/// With `split`, the updates are applied on rayon's threads, each on a range of the columns.
+/// With `split` (scratch for each thread), the updates are applied on rayon's threads, each on
+/// a range of the columns.
 ///
 /// # Safety
 /// Every descendant of `s` is factorised, and no other task touches `s`'s values or reads
@@ -574,7 +590,7 @@ unsafe fn supernode(
     s: usize,
     work: &mut Work,
     par: Par,
-    split: bool,
+    split: Option<(&PerThread<Scratch>, Limits)>,
     schur: Option<&mut Schur>,
 ) -> Result<(), usize> {
     let (s_start, s_end) = (st.begin[s], st.begin[s + 1]);
@@ -595,25 +611,10 @@ unsafe fn supernode(
         len: ls.len(),
     };
     // The descendants' updates of the columns `c0..c1`.
-    let columns = |(c0, c1): (usize, usize),
-                   local: &[usize],
-                   row_idx: &mut Vec<usize>,
-                   col_idx: &mut Vec<usize>| {
+    let columns = |(c0, c1): (usize, usize), local: &[usize], scratch: &mut Scratch| {
         for &d in desc {
             // SAFETY: the tasks write disjoint columns of `s`; the descendants are finished.
-            unsafe {
-                update(
-                    st,
-                    values,
-                    &ls_ptr,
-                    s,
-                    d as usize,
-                    local,
-                    row_idx,
-                    col_idx,
-                    (c0, c1),
-                )
-            };
+            unsafe { update(st, values, &ls_ptr, s, d as usize, local, scratch, (c0, c1)) };
         }
     };
     // The updates of the columns `c0..c1`, with `split` on rayon's threads in ranges of
@@ -622,27 +623,20 @@ unsafe fn supernode(
         if c0 == c1 {
             return;
         }
-        let chunks: Vec<(usize, usize)> = if split && c1 - c0 >= SPLIT_COLUMNS {
-            column_chunks(
-                c1 - c0,
-                s_nrows - c0,
-                4 * rayon::current_num_threads().max(1),
-            )
-            .into_iter()
-            .map(|(a, b)| (a + c0, b + c0))
-            .collect()
-        } else {
-            vec![(c0, c1)]
-        };
-        if chunks.len() > 1 {
-            use rayon::prelude::*;
-            let local = &work.local;
-            chunks.par_iter().for_each_init(
-                || (Vec::new(), Vec::new()),
-                |(row_idx, col_idx), &range| columns(range, local, row_idx, col_idx),
-            );
-        } else {
-            columns((c0, c1), &work.local, &mut work.row_idx, &mut work.col_idx);
+        match split.filter(|_| c1 - c0 >= SPLIT_COLUMNS) {
+            Some((pool, limits)) => {
+                use rayon::prelude::*;
+                let local = &work.local;
+                column_chunks(c1 - c0, s_nrows - c0, SPLIT_PARTS)
+                    .into_par_iter()
+                    .for_each(|(a, b)| {
+                        pool.with(
+                            || Scratch::new(limits),
+                            |scratch| columns((a + c0, b + c0), local, scratch),
+                        )
+                    });
+            }
+            None => columns((c0, c1), &work.local, &mut work.upd),
         }
     };
     // SAFETY (each `block`): the updates are finished when it is called.
@@ -842,9 +836,17 @@ fn column_chunks(ncols: usize, nrows: usize, parts: usize) -> Vec<(usize, usize)
     out
 }
 
-/// The update of supernode `s` by its descendant `d`, restricted to `s`'s columns
-/// `c0..c1` (all of them: faer's own call): `L_s −= L_d,rows D_d L_d,colsᵀ` on the lower
-/// triangle, with faer's gather-scatter kernel on one thread.
+/// The update of supernode `s` by its descendant `d`, restricted to `s`'s columns `c0..c1`:
+///
+/// ```text
+/// L_s[r, c] −= Σ_k L_d[r, k] D_d[k] L_d[c, k]     for the rows r ≥ c of d's pattern in s
+/// ```
+///
+/// with `c` the rows of `d`'s pattern among those columns. The product is formed by faer's
+/// matrix product in blocks of [`UPDATE_BLOCK`] columns (sequentially, into `scratch`, the
+/// whole rectangle under each block's first column) and subtracted from `L_s` at the local
+/// rows and columns of `d`'s pattern (its lower part only). An element's value depends on the
+/// update's shape (`c0..c1` and `d`), not on the thread that runs it.
 ///
 /// # Safety
 /// `d` is finished and no other task touches `s`'s columns `c0..c1`.
@@ -856,10 +858,10 @@ unsafe fn update(
     s: usize,
     d: usize,
     local: &[usize],
-    row_idx: &mut Vec<usize>,
-    col_idx: &mut Vec<usize>,
+    scratch: &mut Scratch,
     (c0, c1): (usize, usize),
 ) {
+    use faer::linalg::matmul::matmul;
     let (s_start, s_end) = (st.begin[s], st.begin[s + 1]);
     let s_nrows = (s_end - s_start) + st.pattern(s).len();
     let d_pattern = st.pattern(d);
@@ -871,6 +873,12 @@ unsafe fn update(
     if mid == 0 {
         return;
     }
+    let Scratch {
+        row_idx,
+        col_idx,
+        scaled,
+        prod,
+    } = scratch;
     row_idx.clear();
     row_idx.extend(
         d_pattern[lo..]
@@ -880,62 +888,49 @@ unsafe fn update(
     col_idx.clear();
     col_idx.extend(d_pattern[lo..lo + mid].iter().map(|&r| r - s_start));
     // Every row inside `s`'s block (a row of `d` below `s` that is not in `s`'s pattern would
-    // be written outside it), as faer's call asserts.
+    // be written outside it).
     assert!(
         row_idx.iter().all(|&r| r < s_nrows),
         "supernode {d}'s rows are not in supernode {s}'s pattern"
     );
     // SAFETY: `d` is finished (the caller's contract).
     let ld = unsafe { values.get(st.val_ptr[d]..st.val_ptr[d + 1]) };
+    // SAFETY: this task alone touches `s`'s columns `c0..c1` (the caller's contract).
+    let ls = unsafe { ls.get_mut(c0 * s_nrows..c1 * s_nrows) };
     let nrows = d_pattern.len() - lo;
-    let alpha = -1.0f64;
-    #[cfg(target_arch = "x86_64")]
-    {
-        use private_gemm_x86::{Accum, DType, DstKind, IType};
-        let instr = instruction_set().expect("checked by `factorise`");
-        // SAFETY: the kernel reads `nrows × d_ncols` values of `L_d` from its row
-        // `d_ncols + lo`, `mid` of them from the same row, the diagonal of its leading block,
-        // and adds to `s`'s values at the rows `row_idx` and columns `col_idx` (within its
-        // `s_nrows × s_ncols` block: each local row below `s_nrows`, each column below
-        // `c1`), which this task alone writes (the caller's contract).
-        unsafe {
-            private_gemm_x86::gemm(
-                DType::F64,
-                if size_of::<usize>() == 8 {
-                    IType::U64
-                } else {
-                    IType::U32
-                },
-                instr,
-                nrows,
-                mid,
-                d_ncols,
-                ls.ptr as *mut (),
-                1,
-                s_nrows as isize,
-                row_idx.as_ptr() as *const (),
-                col_idx.as_ptr() as *const (),
-                DstKind::Lower,
-                Accum::Add,
-                ld.as_ptr().add(d_ncols + lo) as *const (),
-                1,
-                d_nrows as isize,
-                false,
-                ld.as_ptr() as *const (),
-                d_nrows as isize + 1,
-                ld.as_ptr().add(d_ncols + lo) as *const (),
-                d_nrows as isize,
-                1,
-                true,
-                &raw const alpha as *const (),
-                1,
-            );
+    // `L_d`'s rows from the first in `c0..c1` down.
+    let below = faer::MatRef::from_column_major_slice_with_stride(
+        &ld[d_ncols + lo..],
+        nrows,
+        d_ncols,
+        d_nrows,
+    );
+    for j0 in (0..mid).step_by(UPDATE_BLOCK) {
+        let w = (mid - j0).min(UPDATE_BLOCK);
+        let m = nrows - j0;
+        // `D_d L_d[j0..j0 + w, :]ᵀ`, `d_ncols × w`.
+        let scaled = &mut scaled[..d_ncols * w];
+        for (j, col) in scaled.chunks_exact_mut(d_ncols).enumerate() {
+            for (k, x) in col.iter_mut().enumerate() {
+                *x = ld[k * d_nrows + k] * below[(j0 + j, k)];
+            }
         }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = (ld, nrows, alpha, ls, s_nrows);
-        unreachable!("`available` is false off x86-64");
+        let prod = &mut prod[..m * w];
+        matmul(
+            faer::MatMut::from_column_major_slice_mut(prod, m, w),
+            faer::Accum::Replace,
+            below.subrows(j0, m),
+            faer::MatRef::from_column_major_slice(scaled, d_ncols, w),
+            1.0,
+            Par::Seq,
+        );
+        for (j, p) in prod.chunks_exact(m).enumerate() {
+            let c = col_idx[j0 + j] - c0;
+            let dst = &mut ls[c * s_nrows..(c + 1) * s_nrows];
+            for (&r, &x) in row_idx[j0 + j..].iter().zip(&p[j..]) {
+                dst[r] -= x;
+            }
+        }
     }
 }
 
