@@ -32,20 +32,26 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{MatMut, Par};
 
-/// A symmetric matrix's lower triangle in compressed columns, in the factor's (permuted)
-/// numbering, as the factorisation reads it.
+/// A symmetric matrix's lower triangle in the factor's (permuted) numbering, as the
+/// factorisation reads it: in parts, each in compressed columns of its own; a column's entries
+/// are those of all the parts.
 pub struct LowerCsc {
-    pub col_ptr: Vec<usize>,
-    pub row_idx: Vec<u32>,
-    pub values: Vec<f64>,
+    parts: Vec<LowerPart>,
+}
+
+/// One part of a [`LowerCsc`]: `col_ptr` has the matrix's order plus one pointers.
+struct LowerPart {
+    col_ptr: Vec<usize>,
+    row_idx: Vec<u32>,
+    values: Vec<f64>,
 }
 
 impl LowerCsc {
     /// The lower triangle of `P A Pᵀ` from the upper triangle of `A` in compressed columns
     /// (`col_ptr`, `row_idx`, the value of entry `p` given by `value(p)`; entries below the
-    /// diagonal are ignored), where `fwd[new] = old`. In parts of the columns on rayon's
-    /// threads; the entries of a column come in the order of the parts, and the
-    /// factorisation adds each to a value of its own, so their order does not matter.
+    /// diagonal are ignored), where `fwd[new] = old`. One part per range of `A`'s columns
+    /// (about equal numbers of entries), made on rayon's threads; the factorisation adds each
+    /// entry to a value of its own, so their order does not matter.
     pub fn permuted(
         col_ptr: &[usize],
         row_idx: &[usize],
@@ -59,6 +65,7 @@ impl LowerCsc {
         for (new, &old) in fwd.iter().enumerate() {
             inv[old] = new as u32;
         }
+        // (column, row) of the entry (r, c) of the upper triangle, r ≤ c.
         let place = |r: usize, c: usize| {
             let (pr, pc) = (inv[r], inv[c]);
             if pr >= pc { (pc, pr) } else { (pr, pc) }
@@ -72,78 +79,46 @@ impl LowerCsc {
                     .min(size)
             })
             .collect();
-        let parts: Vec<(usize, usize)> = bounds.windows(2).map(|w| (w[0], w[1])).collect();
-        // Each part's entries per destination column, then their offsets in it.
-        let mut counts: Vec<Vec<u32>> = parts
-            .par_iter()
-            .map(|&(c0, c1)| {
-                let mut count = vec![0u32; size];
-                for c in c0..c1 {
-                    for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
-                        if r <= c {
-                            count[place(r, c).0 as usize] += 1;
-                        }
-                    }
+        let parts = bounds
+            .par_windows(2)
+            .map(|w| {
+                let entries = || {
+                    (w[0]..w[1]).flat_map(|c| {
+                        (col_ptr[c]..col_ptr[c + 1])
+                            .filter(move |&p| row_idx[p] <= c)
+                            .map(move |p| (p, place(row_idx[p], c)))
+                    })
+                };
+                // Entries per destination column, then their offsets: `ptr[col]` is where
+                // the next entry of `col` goes, the end of the column once all are placed.
+                let mut ptr = vec![0usize; size + 1];
+                for (_, (col, _)) in entries() {
+                    ptr[col as usize + 1] += 1;
                 }
-                count
+                for j in 0..size {
+                    ptr[j + 1] += ptr[j];
+                }
+                let nnz = ptr[size];
+                let (mut rows, mut values) = (vec![0u32; nnz], vec![0.0; nnz]);
+                for (p, (col, row)) in entries() {
+                    let q = &mut ptr[col as usize];
+                    rows[*q] = row;
+                    values[*q] = value(p);
+                    *q += 1;
+                }
+                // Each pointer now holds its column's end: shifted back to the starts.
+                ptr.copy_within(0..size, 1);
+                ptr[0] = 0;
+                LowerPart {
+                    col_ptr: ptr,
+                    row_idx: rows,
+                    values,
+                }
             })
             .collect();
-        let mut ptr = vec![0usize; size + 1];
-        for j in 0..size {
-            let mut off = 0u32;
-            for count in counts.iter_mut() {
-                let k = count[j];
-                count[j] = off;
-                off += k;
-            }
-            ptr[j + 1] = ptr[j] + off as usize;
-        }
-        let nnz = ptr[size];
-        let mut rows = vec![0u32; nnz];
-        let mut vals = vec![0.0; nnz];
-        let out = (
-            Values {
-                ptr: vals.as_mut_ptr(),
-                len: nnz,
-            },
-            RowsOut(rows.as_mut_ptr()),
-        );
-        counts
-            .par_iter_mut()
-            .zip(&parts)
-            .for_each(|(next, &(c0, c1))| {
-                let out = &out;
-                for c in c0..c1 {
-                    for p in col_ptr[c]..col_ptr[c + 1] {
-                        let r = row_idx[p];
-                        if r <= c {
-                            let (col, row) = place(r, c);
-                            let q = ptr[col as usize] + next[col as usize] as usize;
-                            next[col as usize] += 1;
-                            assert!(q < nnz);
-                            // SAFETY: `q` is in bounds (asserted) and this part's own slot
-                            // of the column: the parts' offsets do not overlap.
-                            unsafe {
-                                *out.0.ptr.add(q) = value(p);
-                                *out.1.0.add(q) = row;
-                            }
-                        }
-                    }
-                }
-            });
-        LowerCsc {
-            col_ptr: ptr,
-            row_idx: rows,
-            values: vals,
-        }
+        LowerCsc { parts }
     }
 }
-
-/// Where the parts of [`LowerCsc::permuted`] write their rows (disjoint slots).
-struct RowsOut(*mut u32);
-
-// SAFETY: the parts write disjoint slots (`LowerCsc::permuted`).
-unsafe impl Sync for RowsOut {}
 
 /// The supernodal structure the factorisation needs: supernode `s` has the columns
 /// `begin[s]..begin[s + 1]`, the off-diagonal rows `rows[row_ptr[s]..row_ptr[s + 1]]`
@@ -204,6 +179,8 @@ struct Schedule {
     desc: Vec<u32>,
     /// Disjoint subtrees (their supernodes ascending), the largest first.
     subtrees: Vec<Vec<usize>>,
+    /// Per supernode in a subtree, its place in the subtree's list.
+    slot: Vec<u32>,
     /// The supernodes in no subtree, ascending.
     top: Vec<usize>,
 }
@@ -301,9 +278,11 @@ impl Schedule {
         top.sort_unstable();
         // Each subtree holds the descendants of its supernodes (its task reads no other).
         let mut tree_of = vec![usize::MAX; nsup];
+        let mut slot = vec![u32::MAX; nsup];
         for (t, nodes) in subtrees.iter().enumerate() {
-            for &s in nodes {
+            for (i, &s) in nodes.iter().enumerate() {
                 tree_of[s] = t;
+                slot[s] = i as u32;
             }
         }
         for (t, nodes) in subtrees.iter().enumerate() {
@@ -319,6 +298,7 @@ impl Schedule {
             desc_ptr,
             desc,
             subtrees,
+            slot,
             top,
         }
     }
@@ -337,35 +317,37 @@ pub(crate) fn schedule_shape(st: &Structure) -> (usize, usize, usize) {
     (sc.subtrees.len(), sc.top.len(), widest)
 }
 
-/// The factor's values, written by several tasks at once: each writes only the values of the
-/// supernodes it factorises, and reads only those of finished ones.
-struct Values {
-    ptr: *mut f64,
-    len: usize,
+/// The values of the finished supernodes that the updates of a supernode read.
+enum Finished<'a> {
+    /// A subtree's task: the values of its supernodes before the current one (`nodes`, in
+    /// ascending order), supernode `d`'s at `slot[d]`.
+    Subtree {
+        nodes: &'a [usize],
+        slot: &'a [u32],
+        values: &'a [&'a mut [f64]],
+    },
+    /// The top supernodes: all the values before the current supernode's.
+    Prefix {
+        val_ptr: &'a [usize],
+        values: &'a [f64],
+    },
 }
 
-// SAFETY: see `Values`; the schedule gives every supernode to one task, after all of its
-// descendants are finished.
-unsafe impl Sync for Values {}
-
-impl Values {
-    /// The values `range`.
-    ///
-    /// # Safety
-    /// No other task writes them while the slice lives.
-    unsafe fn get(&self, range: std::ops::Range<usize>) -> &[f64] {
-        assert!(range.start <= range.end && range.end <= self.len);
-        unsafe { std::slice::from_raw_parts(self.ptr.add(range.start), range.len()) }
-    }
-
-    /// The values `range`, to write.
-    ///
-    /// # Safety
-    /// No other task reads or writes them while the slice lives.
-    #[allow(clippy::mut_from_ref)]
-    unsafe fn get_mut(&self, range: std::ops::Range<usize>) -> &mut [f64] {
-        assert!(range.start <= range.end && range.end <= self.len);
-        unsafe { std::slice::from_raw_parts_mut(self.ptr.add(range.start), range.len()) }
+impl Finished<'_> {
+    /// Supernode `d`'s values (panics unless `d` is among the finished ones).
+    fn get(&self, d: usize) -> &[f64] {
+        match self {
+            Finished::Subtree {
+                nodes,
+                slot,
+                values,
+            } => {
+                let i = slot[d] as usize;
+                assert!(nodes[i] == d, "supernode {d} is not in the subtree");
+                &values[i][..]
+            }
+            Finished::Prefix { val_ptr, values } => &values[val_ptr[d]..val_ptr[d + 1]],
+        }
     }
 }
 
@@ -475,7 +457,7 @@ pub fn factorise(
     let nsup = st.n_supernodes();
     let size = *st.begin.last().unwrap_or(&0);
     assert_eq!(l.len(), *st.val_ptr.last().unwrap_or(&0));
-    assert_eq!(a.col_ptr.len(), size + 1);
+    assert!(a.parts.iter().all(|p| p.col_ptr.len() == size + 1));
     st.check();
     debug_assert!(l.iter().step_by(4096).all(|&x| x == 0.0), "zeros on entry");
     let schedule = Schedule::of(st);
@@ -487,10 +469,6 @@ pub fn factorise(
             .max()
             .unwrap_or(0),
         rows: (0..nsup).map(|s| st.pattern(s).len()).max().unwrap_or(0),
-    };
-    let values = Values {
-        ptr: l.as_mut_ptr(),
-        len: l.len(),
     };
     // The Schur complement of the trailing columns `n..`, where they end the last
     // supernode (the root: the dense block of the constraint rows, with or without the top
@@ -506,33 +484,57 @@ pub fn factorise(
             spare,
             seconds: 0.0,
         });
+    // Every supernode's values apart, and each subtree's handed to its task (in the order of
+    // its list): a task writes the values of its own supernodes and reads only theirs.
+    let mut pieces: Vec<Option<&mut [f64]>> = Vec::with_capacity(nsup);
+    let mut rest = &mut *l;
+    for s in 0..nsup {
+        let (piece, after) =
+            std::mem::take(&mut rest).split_at_mut(st.val_ptr[s + 1] - st.val_ptr[s]);
+        pieces.push(Some(piece));
+        rest = after;
+    }
+    let tasks: Vec<(&[usize], Vec<&mut [f64]>)> = schedule
+        .subtrees
+        .iter()
+        .map(|nodes| {
+            let values = nodes
+                .iter()
+                .map(|&s| pieces[s].take().expect("in one subtree"));
+            (&nodes[..], values.collect())
+        })
+        .collect();
+    drop(pieces);
     // One set of working arrays per thread that runs a subtree (the row map alone is 8 bytes
     // per row), made on its first subtree.
     let works = PerThread::new();
     // The subtrees, each on one thread; the first failure by supernode is the one reported.
-    let failed = schedule
-        .subtrees
-        .par_iter()
-        .map(|nodes| {
+    let failed = tasks
+        .into_par_iter()
+        .map(|(nodes, mut values)| {
             works.with(
                 || Work::new(size, limits, Par::Seq),
                 |work| {
-                    for &s in nodes {
-                        // SAFETY: this task alone factorises the subtree's supernodes, whose
-                        // descendants are in the subtree and earlier in `nodes`.
-                        unsafe {
-                            supernode(
-                                st,
-                                Some(&a),
-                                &schedule,
-                                &values,
-                                s,
-                                work,
-                                Par::Seq,
-                                None,
-                                None,
-                            )?
+                    for (i, &s) in nodes.iter().enumerate() {
+                        // The subtree holds `s`'s descendants (`Schedule::of`), earlier in it.
+                        let (done, rest) = values.split_at_mut(i);
+                        let finished = Finished::Subtree {
+                            nodes,
+                            slot: &schedule.slot,
+                            values: done,
                         };
+                        supernode(
+                            st,
+                            Some(&a),
+                            &schedule,
+                            &finished,
+                            rest[0],
+                            s,
+                            work,
+                            Par::Seq,
+                            None,
+                            None,
+                        )?;
                     }
                     Ok(())
                 },
@@ -553,47 +555,46 @@ pub fn factorise(
     let pool = PerThread::new();
     let mut a = Some(a);
     for &s in &schedule.top {
+        // Every descendant of `s` comes before it (its rows are below its columns).
+        let (done, rest) = l.split_at_mut(st.val_ptr[s]);
+        let ls = &mut rest[..st.val_ptr[s + 1] - st.val_ptr[s]];
         if schur.as_ref().is_some_and(|w| w.s == s) {
             // The root, last: its columns of `a` now, and `a` freed before its dense block
             // is worked on (the peak memory of the run at L7).
             let root = a.take().expect("the root is the last supernode");
-            // SAFETY: the root is this task's, and has no off-diagonal rows.
-            scatter(st, &root, s, &work.local, unsafe {
-                values.get_mut(st.val_ptr[s]..st.val_ptr[s + 1])
-            });
+            scatter(st, &root, s, &work.local, ls);
         }
-        // SAFETY: the top supernodes one after the other, after every subtree.
-        unsafe {
-            supernode(
-                st,
-                a.as_ref(),
-                &schedule,
-                &values,
-                s,
-                &mut work,
-                par,
-                Some((&pool, limits)),
-                schur.as_mut().filter(|w| w.s == s),
-            )?
+        let finished = Finished::Prefix {
+            val_ptr: st.val_ptr,
+            values: done,
         };
+        supernode(
+            st,
+            a.as_ref(),
+            &schedule,
+            &finished,
+            ls,
+            s,
+            &mut work,
+            par,
+            Some((&pool, limits)),
+            schur.as_mut().filter(|w| w.s == s),
+        )?;
     }
     Ok(schur.and_then(|w| w.w.map(|m| (m, w.seconds))))
 }
 
-/// Factorises supernode `s`: its columns of `a`, the updates of its descendants in ascending
-/// order, its dense `L D Lᵀ`, the solve of its off-diagonal rows and their scaling by `D⁻¹`.
-/// With `split` (scratch for each thread), the updates are applied on rayon's threads, each on
-/// a range of the columns.
-///
-/// # Safety
-/// Every descendant of `s` is factorised, and no other task touches `s`'s values or reads
-/// them.
+/// Factorises supernode `s` into its values `ls`: its columns of `a`, the updates of its
+/// descendants (`finished`) in ascending order, its dense `L D Lᵀ`, the solve of its
+/// off-diagonal rows and their scaling by `D⁻¹`. With `split` (scratch for each thread), the
+/// updates are applied on rayon's threads, each on a range of the columns.
 #[allow(clippy::too_many_arguments)]
-unsafe fn supernode(
+fn supernode(
     st: &Structure,
     a: Option<&LowerCsc>,
     schedule: &Schedule,
-    values: &Values,
+    finished: &Finished,
+    ls: &mut [f64],
     s: usize,
     work: &mut Work,
     par: Par,
@@ -604,58 +605,58 @@ unsafe fn supernode(
     let s_pattern = st.pattern(s);
     let s_ncols = s_end - s_start;
     let s_nrows = s_ncols + s_pattern.len();
+    assert_eq!(ls.len(), s_nrows * s_ncols);
     for (i, &row) in s_pattern.iter().enumerate() {
         work.local[row] = i + s_ncols;
     }
-    // SAFETY: `s`'s values are this task's (the caller's contract).
-    let ls = unsafe { values.get_mut(st.val_ptr[s]..st.val_ptr[s + 1]) };
     if let Some(a) = a {
         scatter(st, a, s, &work.local, ls);
     }
     let desc = schedule.descendants(s);
-    let ls_ptr = Values {
-        ptr: ls.as_mut_ptr(),
-        len: ls.len(),
-    };
-    // The descendants' updates of the columns `c0..c1`.
-    let columns = |(c0, c1): (usize, usize), local: &[usize], scratch: &mut Scratch| {
-        for &d in desc {
-            // SAFETY: the tasks write disjoint columns of `s`; the descendants are finished.
-            unsafe { update(st, values, &ls_ptr, s, d as usize, local, scratch, (c0, c1)) };
-        }
-    };
+    // The descendants' updates of the columns `c0..c1` (their values `cols`).
+    let columns =
+        |(c0, c1): (usize, usize), cols: &mut [f64], local: &[usize], scratch: &mut Scratch| {
+            for &d in desc {
+                let d = d as usize;
+                update(st, finished.get(d), cols, s, d, local, scratch, (c0, c1));
+            }
+        };
     // The updates of the columns `c0..c1`, with `split` on rayon's threads in ranges of
     // about equal area (each element still takes its updates in the same order).
-    let updates = |(c0, c1): (usize, usize), work: &mut Work| {
+    let updates = |(c0, c1): (usize, usize), ls: &mut [f64], work: &mut Work| {
         if c0 == c1 {
             return;
         }
+        let cols = &mut ls[c0 * s_nrows..c1 * s_nrows];
         match split.filter(|_| c1 - c0 >= SPLIT_COLUMNS) {
             Some((pool, limits)) => {
                 use rayon::prelude::*;
+                let mut rest = cols;
+                let parts: Vec<_> = column_chunks(c1 - c0, s_nrows - c0, SPLIT_PARTS)
+                    .into_iter()
+                    .map(|(a, b)| {
+                        let (part, after) =
+                            std::mem::take(&mut rest).split_at_mut((b - a) * s_nrows);
+                        rest = after;
+                        ((a + c0, b + c0), part)
+                    })
+                    .collect();
                 let local = &work.local;
-                column_chunks(c1 - c0, s_nrows - c0, SPLIT_PARTS)
-                    .into_par_iter()
-                    .for_each(|(a, b)| {
-                        pool.with(
-                            || Scratch::new(limits),
-                            |scratch| columns((a + c0, b + c0), local, scratch),
-                        )
-                    });
+                parts.into_par_iter().for_each(|(range, part)| {
+                    pool.with(
+                        || Scratch::new(limits),
+                        |scratch| columns(range, part, local, scratch),
+                    )
+                });
             }
-            None => columns((c0, c1), &work.local, &mut work.upd),
+            None => columns((c0, c1), cols, &work.local, &mut work.upd),
         }
-    };
-    // SAFETY (each `block`): the updates are finished when it is called.
-    let block = || {
-        let ls = unsafe { ls_ptr.get_mut(0..ls_ptr.len) };
-        MatMut::from_column_major_slice_mut(ls, s_nrows, s_ncols)
     };
     let factored = match schur {
         None => {
-            updates((0, s_ncols), work);
+            updates((0, s_ncols), ls, work);
             ldlt(
-                block().split_at_row_mut(s_ncols).0,
+                block(ls, s_nrows, s_ncols).split_at_row_mut(s_ncols).0,
                 par,
                 MemStack::new(&mut work.mem),
             )
@@ -663,15 +664,23 @@ unsafe fn supernode(
         Some(w) => {
             // The root: its separator columns first (they need only their own updates), then
             // the constraint block, timed apart.
-            updates((0, w.kk), work);
-            w.factorise_leading(block(), par, MemStack::new(&mut work.mem))
-                .and_then(|()| {
-                    let t = std::time::Instant::now();
-                    updates((w.kk, s_ncols), work);
-                    let r = w.factorise_block(block(), par, MemStack::new(&mut work.mem));
-                    w.seconds = t.elapsed().as_secs_f64();
-                    r
-                })
+            updates((0, w.kk), ls, work);
+            w.factorise_leading(
+                block(ls, s_nrows, s_ncols),
+                par,
+                MemStack::new(&mut work.mem),
+            )
+            .and_then(|()| {
+                let t = std::time::Instant::now();
+                updates((w.kk, s_ncols), ls, work);
+                let r = w.factorise_block(
+                    block(ls, s_nrows, s_ncols),
+                    par,
+                    MemStack::new(&mut work.mem),
+                );
+                w.seconds = t.elapsed().as_secs_f64();
+                r
+            })
         }
     };
     if let Err(index) = factored {
@@ -680,7 +689,7 @@ unsafe fn supernode(
         }
         return Err(index + s_start);
     }
-    let (mut top, mut bot) = block().split_at_row_mut(s_ncols);
+    let (mut top, mut bot) = block(ls, s_nrows, s_ncols).split_at_row_mut(s_ncols);
     for j in 0..s_ncols {
         for i in 0..j {
             top[(i, j)] = 0.0;
@@ -691,6 +700,11 @@ unsafe fn supernode(
         work.local[row] = usize::MAX;
     }
     Ok(())
+}
+
+/// A supernode's values `ls` as its `nrows × ncols` column-major block.
+fn block(ls: &mut [f64], nrows: usize, ncols: usize) -> MatMut<'_, f64> {
+    MatMut::from_column_major_slice_mut(ls, nrows, ncols)
 }
 
 /// faer's dense `L D Lᵀ` of `a` in place: `Err(column)` at a zero pivot.
@@ -813,14 +827,16 @@ fn scatter(st: &Structure, a: &LowerCsc, s: usize, local: &[usize], ls: &mut [f6
     let s_nrows = (s_end - s_start) + st.pattern(s).len();
     for j in s_start..s_end {
         let col = (j - s_start) * s_nrows;
-        for p in a.col_ptr[j]..a.col_ptr[j + 1] {
-            let i = a.row_idx[p] as usize;
-            if i < j {
-                continue;
+        for part in &a.parts {
+            for p in part.col_ptr[j]..part.col_ptr[j + 1] {
+                let i = part.row_idx[p] as usize;
+                if i < j {
+                    continue;
+                }
+                let ix = if i >= s_end { local[i] } else { i - s_start };
+                assert!(ix < s_nrows, "an entry outside supernode {s}'s pattern");
+                ls[col + ix] += part.values[p];
             }
-            let ix = if i >= s_end { local[i] } else { i - s_start };
-            assert!(ix < s_nrows, "an entry outside supernode {s}'s pattern");
-            ls[col + ix] += a.values[p];
         }
     }
 }
@@ -856,13 +872,12 @@ fn column_chunks(ncols: usize, nrows: usize, parts: usize) -> Vec<(usize, usize)
 /// subtracted from `L_s` at once (its lower part). The blocks depend on the update's shape
 /// alone, so an element's value does not depend on the thread that computes it.
 ///
-/// # Safety
-/// `d` is finished and no other task touches `s`'s columns `c0..c1`.
+/// `ld` holds `d`'s values, `ls` those of `s`'s columns `c0..c1`.
 #[allow(clippy::too_many_arguments)]
-unsafe fn update(
+fn update(
     st: &Structure,
-    values: &Values,
-    ls: &Values,
+    ld: &[f64],
+    ls: &mut [f64],
     s: usize,
     d: usize,
     local: &[usize],
@@ -902,10 +917,8 @@ unsafe fn update(
         row_idx.iter().all(|&r| r < s_nrows),
         "supernode {d}'s rows are not in supernode {s}'s pattern"
     );
-    // SAFETY: `d` is finished (the caller's contract).
-    let ld = unsafe { values.get(st.val_ptr[d]..st.val_ptr[d + 1]) };
-    // SAFETY: this task alone touches `s`'s columns `c0..c1` (the caller's contract).
-    let ls = unsafe { ls.get_mut(c0 * s_nrows..c1 * s_nrows) };
+    assert_eq!(ld.len(), d_nrows * d_ncols);
+    assert_eq!(ls.len(), (c1 - c0) * s_nrows);
     let nrows = d_pattern.len() - lo;
     // `L_d`'s rows from the first in `c0..c1` down (`nrows × d_ncols`, column stride
     // `d_nrows`), its column `k` starting at `first(k)`.
