@@ -41,7 +41,7 @@ pub struct LowerCsc {
 
 /// One part of a [`LowerCsc`]: `col_ptr` has the matrix's order plus one pointers.
 struct LowerPart {
-    col_ptr: Vec<usize>,
+    col_ptr: Vec<u32>,
     row_idx: Vec<u32>,
     values: Vec<f64>,
 }
@@ -82,29 +82,34 @@ impl LowerCsc {
         let parts = bounds
             .par_windows(2)
             .map(|w| {
-                let entries = || {
-                    (w[0]..w[1]).flat_map(|c| {
-                        (col_ptr[c]..col_ptr[c + 1])
-                            .filter(move |&p| row_idx[p] <= c)
-                            .map(move |p| (p, place(row_idx[p], c)))
-                    })
-                };
                 // Entries per destination column, then their offsets: `ptr[col]` is where
                 // the next entry of `col` goes, the end of the column once all are placed.
-                let mut ptr = vec![0usize; size + 1];
-                for (_, (col, _)) in entries() {
-                    ptr[col as usize + 1] += 1;
+                let mut ptr = vec![0u32; size + 1];
+                for c in w[0]..w[1] {
+                    for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
+                        if r <= c {
+                            ptr[place(r, c).0 as usize + 1] += 1;
+                        }
+                    }
                 }
                 for j in 0..size {
-                    ptr[j + 1] += ptr[j];
+                    ptr[j + 1] = ptr[j]
+                        .checked_add(ptr[j + 1])
+                        .expect("fewer than 2³² entries in a part");
                 }
-                let nnz = ptr[size];
+                let nnz = ptr[size] as usize;
                 let (mut rows, mut values) = (vec![0u32; nnz], vec![0.0; nnz]);
-                for (p, (col, row)) in entries() {
-                    let q = &mut ptr[col as usize];
-                    rows[*q] = row;
-                    values[*q] = value(p);
-                    *q += 1;
+                for c in w[0]..w[1] {
+                    for p in col_ptr[c]..col_ptr[c + 1] {
+                        let r = row_idx[p];
+                        if r <= c {
+                            let (col, row) = place(r, c);
+                            let q = &mut ptr[col as usize];
+                            rows[*q as usize] = row;
+                            values[*q as usize] = value(p);
+                            *q += 1;
+                        }
+                    }
                 }
                 // Each pointer now holds its column's end: shifted back to the starts.
                 ptr.copy_within(0..size, 1);
@@ -828,7 +833,7 @@ fn scatter(st: &Structure, a: &LowerCsc, s: usize, local: &[usize], ls: &mut [f6
     for j in s_start..s_end {
         let col = (j - s_start) * s_nrows;
         for part in &a.parts {
-            for p in part.col_ptr[j]..part.col_ptr[j + 1] {
+            for p in part.col_ptr[j] as usize..part.col_ptr[j + 1] as usize {
                 let i = part.row_idx[p] as usize;
                 if i < j {
                     continue;
