@@ -6,7 +6,8 @@
 //! * the shipped Fig. 2: every column of `history.csv` within 2e-9 of its largest value (the
 //!   contact centre, which is zero by symmetry up to 3e-5 mm, within 2e-9 of the contact
 //!   semi-width), the same contact sets in every step; 179 Newton iterations with the
-//!   shortcuts and 185 without;
+//!   shortcuts and 183–191 without (189 measured: the count moves with the factor's last
+//!   bits);
 //! * Fig. 2 with f_s = 0.2, Λ = 0.025 loaded past its peak under force control: both runs
 //!   bracket Q_max (exit 5) and agree on it within 5e-4 of it (2.9e-4 measured): near the
 //!   peak, where the tangent is nearly singular, the digit the shortcuts lose decides at which
@@ -101,7 +102,11 @@ fn the_shortcuts_give_fig2_on_l5_within_round_off_of_direct_solves() {
     }
     let (sa, sb) = (summary(&with), summary(&without));
     assert_eq!(sa["newton_iterations"], json!(179));
-    assert_eq!(sb["newton_iterations"], json!(185));
+    // Without the shortcuts the count moves with the last bits of the factor, which round-off
+    // sets (the order of the sums in the dense kernels): 189 with the tree-scheduled factor
+    // (AVX-512), 187 with faer's own loop (`STICKSLIP_FACTOR=faer`).
+    let direct = sb["newton_iterations"].as_u64().unwrap();
+    assert!((183..=191).contains(&direct), "{direct} iterations without");
     // The summary says which path the run took.
     assert_eq!(sa["contact_shortcuts_from"], json!(768));
     assert_eq!(sb["contact_shortcuts_from"], Value::Null);

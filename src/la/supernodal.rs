@@ -1,7 +1,6 @@
 //! The numeric `L D Lᵀ` of a supernodal analysis (the saddle-point matrix of a contact model),
-//! left-looking as faer's `factorize_supernodal_numeric_ldlt`, with the same kernels and the
-//! same order of operations on every value, but scheduled on rayon's threads by the
-//! elimination tree:
+//! left-looking as faer's `factorize_supernodal_numeric_ldlt`, with faer's public dense
+//! kernels, scheduled on rayon's threads by the elimination tree:
 //!
 //! * **independent subtrees** of the supernodal elimination tree (a nested-dissection
 //!   ordering gives many) are factorised at the same time, each on one thread with sequential
@@ -14,40 +13,45 @@
 //!
 //! faer's own loop takes the supernodes one after the other and parallelises inside each
 //! update: on the L5–L7 ladders most updates are small (supernodes of 2–7 columns), and the
-//! synchronisation of each of them cost more than it gained (the 2-thread numeric
-//! factorisation at L5 was no faster than the 1-thread one, with ~180 000 futex calls at L7).
+//! synchronisation of each costs more than it gains (the 2-thread numeric factorisation at L5
+//! is no faster than the 1-thread one, with ~180 000 futex calls at L7).
 //!
-//! The values are those of faer's loop with sequential kernels, bit for bit, in every supernode
-//! but the root; where the root holds the constraint block (a saddle-point matrix), it is
-//! factorised in two stages (the top separator's columns, then the block, with `W` copied in
-//! between), which is faer's one dense `L D Lᵀ` within round-off
-//! (`la::tests::the_tree_scheduled_factor_is_faers_below_the_root_bit_for_bit`). The
-//! values do not depend on the number of threads: the partition into subtrees is fixed by the
-//! tree alone, every update is a sequential kernel call on its own columns, and the dense
-//! kernels split their work without changing any sum's order.
-//!
-//! Only on x86-64 with AVX2 and FMA, where faer's gather-scatter update kernel (the
-//! `private-gemm-x86` crate, pinned to faer's version) is what faer itself runs
-//! ([`available`]); elsewhere the caller keeps faer's loop.
+//! The update of supernode `s` by a descendant `d` ([`update`]) is a dense product
+//! `L_d,rows D_d L_d,colsᵀ` formed in a per-thread scratch block by `faer::linalg::matmul`
+//! and subtracted from `L_s` at the local rows and columns of `d`'s pattern. The factor is
+//! faer's within round-off: both solve the saddle-point system to a backward error near the
+//! unit round-off (`la::saddle::tests::the_tree_scheduled_factor_is_faers_within_round_off_and_the_same_on_any_threads`).
+//! Where the root holds the constraint block (a saddle-point matrix), it is factorised in two
+//! stages (the top separator's columns, then the block, with `W` copied in between). The
+//! values do not depend on the number of threads: the partition into subtrees and the
+//! column ranges of the split updates are fixed by the tree alone, every update is a
+//! sequential product of a shape fixed by the tree, and the dense kernels split their work
+//! without changing any sum's order.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{MatMut, Par};
 
-/// A symmetric matrix's lower triangle in compressed columns, in the factor's (permuted)
-/// numbering, as the factorisation reads it.
+/// A symmetric matrix's lower triangle in the factor's (permuted) numbering, as the
+/// factorisation reads it: in parts, each in compressed columns of its own; a column's entries
+/// are those of all the parts.
 pub struct LowerCsc {
-    pub col_ptr: Vec<usize>,
-    pub row_idx: Vec<u32>,
-    pub values: Vec<f64>,
+    parts: Vec<LowerPart>,
+}
+
+/// One part of a [`LowerCsc`]: `col_ptr` has the matrix's order plus one pointers.
+struct LowerPart {
+    col_ptr: Vec<u32>,
+    row_idx: Vec<u32>,
+    values: Vec<f64>,
 }
 
 impl LowerCsc {
     /// The lower triangle of `P A Pᵀ` from the upper triangle of `A` in compressed columns
     /// (`col_ptr`, `row_idx`, the value of entry `p` given by `value(p)`; entries below the
-    /// diagonal are ignored), where `fwd[new] = old`. In parts of the columns on rayon's
-    /// threads; the entries of a column come in the order of the parts, and the
-    /// factorisation adds each to a value of its own, so their order does not matter.
+    /// diagonal are ignored), where `fwd[new] = old`. One part per range of `A`'s columns
+    /// (about equal numbers of entries), made on rayon's threads; the factorisation adds each
+    /// entry to a value of its own, so their order does not matter.
     pub fn permuted(
         col_ptr: &[usize],
         row_idx: &[usize],
@@ -61,6 +65,7 @@ impl LowerCsc {
         for (new, &old) in fwd.iter().enumerate() {
             inv[old] = new as u32;
         }
+        // (column, row) of the entry (r, c) of the upper triangle, r ≤ c.
         let place = |r: usize, c: usize| {
             let (pr, pc) = (inv[r], inv[c]);
             if pr >= pc { (pc, pr) } else { (pr, pc) }
@@ -74,78 +79,51 @@ impl LowerCsc {
                     .min(size)
             })
             .collect();
-        let parts: Vec<(usize, usize)> = bounds.windows(2).map(|w| (w[0], w[1])).collect();
-        // Each part's entries per destination column, then their offsets in it.
-        let mut counts: Vec<Vec<u32>> = parts
-            .par_iter()
-            .map(|&(c0, c1)| {
-                let mut count = vec![0u32; size];
-                for c in c0..c1 {
+        let parts = bounds
+            .par_windows(2)
+            .map(|w| {
+                // Entries per destination column, then their offsets: `ptr[col]` is where
+                // the next entry of `col` goes, the end of the column once all are placed.
+                let mut ptr = vec![0u32; size + 1];
+                for c in w[0]..w[1] {
                     for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
                         if r <= c {
-                            count[place(r, c).0 as usize] += 1;
+                            ptr[place(r, c).0 as usize + 1] += 1;
                         }
                     }
                 }
-                count
-            })
-            .collect();
-        let mut ptr = vec![0usize; size + 1];
-        for j in 0..size {
-            let mut off = 0u32;
-            for count in counts.iter_mut() {
-                let k = count[j];
-                count[j] = off;
-                off += k;
-            }
-            ptr[j + 1] = ptr[j] + off as usize;
-        }
-        let nnz = ptr[size];
-        let mut rows = vec![0u32; nnz];
-        let mut vals = vec![0.0; nnz];
-        let out = (
-            Values {
-                ptr: vals.as_mut_ptr(),
-                len: nnz,
-            },
-            RowsOut(rows.as_mut_ptr()),
-        );
-        counts
-            .par_iter_mut()
-            .zip(&parts)
-            .for_each(|(next, &(c0, c1))| {
-                let out = &out;
-                for c in c0..c1 {
+                for j in 0..size {
+                    ptr[j + 1] = ptr[j]
+                        .checked_add(ptr[j + 1])
+                        .expect("fewer than 2³² entries in a part");
+                }
+                let nnz = ptr[size] as usize;
+                let (mut rows, mut values) = (vec![0u32; nnz], vec![0.0; nnz]);
+                for c in w[0]..w[1] {
                     for p in col_ptr[c]..col_ptr[c + 1] {
                         let r = row_idx[p];
                         if r <= c {
                             let (col, row) = place(r, c);
-                            let q = ptr[col as usize] + next[col as usize] as usize;
-                            next[col as usize] += 1;
-                            assert!(q < nnz);
-                            // SAFETY: `q` is in bounds (asserted) and this part's own slot
-                            // of the column: the parts' offsets do not overlap.
-                            unsafe {
-                                *out.0.ptr.add(q) = value(p);
-                                *out.1.0.add(q) = row;
-                            }
+                            let q = &mut ptr[col as usize];
+                            rows[*q as usize] = row;
+                            values[*q as usize] = value(p);
+                            *q += 1;
                         }
                     }
                 }
-            });
-        LowerCsc {
-            col_ptr: ptr,
-            row_idx: rows,
-            values: vals,
-        }
+                // Each pointer now holds its column's end: shifted back to the starts.
+                ptr.copy_within(0..size, 1);
+                ptr[0] = 0;
+                LowerPart {
+                    col_ptr: ptr,
+                    row_idx: rows,
+                    values,
+                }
+            })
+            .collect();
+        LowerCsc { parts }
     }
 }
-
-/// Where the parts of [`LowerCsc::permuted`] write their rows (disjoint slots).
-struct RowsOut(*mut u32);
-
-// SAFETY: the parts write disjoint slots (`LowerCsc::permuted`).
-unsafe impl Sync for RowsOut {}
 
 /// The supernodal structure the factorisation needs: supernode `s` has the columns
 /// `begin[s]..begin[s + 1]`, the off-diagonal rows `rows[row_ptr[s]..row_ptr[s + 1]]`
@@ -198,31 +176,6 @@ impl Structure<'_> {
     }
 }
 
-/// Whether this machine runs faer's gather-scatter update kernel (x86-64 with AVX2 and FMA),
-/// and so this factorisation.
-pub fn available() -> bool {
-    instruction_set().is_some()
-}
-
-#[cfg(target_arch = "x86_64")]
-fn instruction_set() -> Option<private_gemm_x86::InstrSet> {
-    // The choice faer makes (`linalg::matmul::internal::spicy_matmul`).
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        Some(private_gemm_x86::InstrSet::Avx512)
-    } else if std::arch::is_x86_feature_detected!("avx2")
-        && std::arch::is_x86_feature_detected!("fma")
-    {
-        Some(private_gemm_x86::InstrSet::Avx256)
-    } else {
-        None
-    }
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-fn instruction_set() -> Option<()> {
-    None
-}
-
 /// The elimination tree's schedule: the descendants that update each supernode, the
 /// independent subtrees and the supernodes above them.
 struct Schedule {
@@ -231,6 +184,8 @@ struct Schedule {
     desc: Vec<u32>,
     /// Disjoint subtrees (their supernodes ascending), the largest first.
     subtrees: Vec<Vec<usize>>,
+    /// Per supernode in a subtree, its place in the subtree's list.
+    slot: Vec<u32>,
     /// The supernodes in no subtree, ascending.
     top: Vec<usize>,
 }
@@ -241,6 +196,11 @@ const SPLIT_SHARE: f64 = 1.0 / 16.0;
 
 /// A top supernode's updates are split over its columns from this many columns.
 pub const SPLIT_COLUMNS: usize = 32;
+
+/// A split top supernode's updates are applied in this many ranges of its columns: a fixed
+/// number, so that every update's shape, and with it the order of the sums in faer's product,
+/// does not depend on the number of threads.
+const SPLIT_PARTS: usize = 8;
 
 impl Schedule {
     fn of(st: &Structure) -> Schedule {
@@ -323,9 +283,11 @@ impl Schedule {
         top.sort_unstable();
         // Each subtree holds the descendants of its supernodes (its task reads no other).
         let mut tree_of = vec![usize::MAX; nsup];
+        let mut slot = vec![u32::MAX; nsup];
         for (t, nodes) in subtrees.iter().enumerate() {
-            for &s in nodes {
+            for (i, &s) in nodes.iter().enumerate() {
                 tree_of[s] = t;
+                slot[s] = i as u32;
             }
         }
         for (t, nodes) in subtrees.iter().enumerate() {
@@ -341,6 +303,7 @@ impl Schedule {
             desc_ptr,
             desc,
             subtrees,
+            slot,
             top,
         }
     }
@@ -359,59 +322,120 @@ pub(crate) fn schedule_shape(st: &Structure) -> (usize, usize, usize) {
     (sc.subtrees.len(), sc.top.len(), widest)
 }
 
-/// The factor's values, written by several tasks at once: each writes only the values of the
-/// supernodes it factorises, and reads only those of finished ones.
-struct Values {
-    ptr: *mut f64,
-    len: usize,
+/// The values of the finished supernodes that the updates of a supernode read.
+enum Finished<'a> {
+    /// A subtree's task: the values of its supernodes before the current one (`nodes`, in
+    /// ascending order), supernode `d`'s at `slot[d]`.
+    Subtree {
+        nodes: &'a [usize],
+        slot: &'a [u32],
+        values: &'a [&'a mut [f64]],
+    },
+    /// The top supernodes: all the values before the current supernode's.
+    Prefix {
+        val_ptr: &'a [usize],
+        values: &'a [f64],
+    },
 }
 
-// SAFETY: see `Values`; the schedule gives every supernode to one task, after all of its
-// descendants are finished.
-unsafe impl Sync for Values {}
-
-impl Values {
-    /// The values `range`.
-    ///
-    /// # Safety
-    /// No other task writes them while the slice lives.
-    unsafe fn get(&self, range: std::ops::Range<usize>) -> &[f64] {
-        assert!(range.start <= range.end && range.end <= self.len);
-        unsafe { std::slice::from_raw_parts(self.ptr.add(range.start), range.len()) }
-    }
-
-    /// The values `range`, to write.
-    ///
-    /// # Safety
-    /// No other task reads or writes them while the slice lives.
-    #[allow(clippy::mut_from_ref)]
-    unsafe fn get_mut(&self, range: std::ops::Range<usize>) -> &mut [f64] {
-        assert!(range.start <= range.end && range.end <= self.len);
-        unsafe { std::slice::from_raw_parts_mut(self.ptr.add(range.start), range.len()) }
+impl Finished<'_> {
+    /// Supernode `d`'s values (panics unless `d` is among the finished ones).
+    fn get(&self, d: usize) -> &[f64] {
+        match self {
+            Finished::Subtree {
+                nodes,
+                slot,
+                values,
+            } => {
+                let i = slot[d] as usize;
+                assert!(nodes[i] == d, "supernode {d} is not in the subtree");
+                &values[i][..]
+            }
+            Finished::Prefix { val_ptr, values } => &values[val_ptr[d]..val_ptr[d + 1]],
+        }
     }
 }
 
 /// One thread's working arrays: the local row of each row of the supernode being factorised,
-/// the index lists of one update and the dense factorisation's scratch.
+/// the scratch of its updates and the dense factorisation's scratch.
 struct Work {
     local: Vec<usize>,
-    row_idx: Vec<usize>,
-    col_idx: Vec<usize>,
+    upd: Scratch,
     mem: MemBuffer,
 }
 
 impl Work {
-    fn new(size: usize, max_cols: usize, par: Par) -> Work {
+    fn new(size: usize, limits: Limits, par: Par) -> Work {
         let req = faer::linalg::cholesky::ldlt::factor::cholesky_in_place_scratch::<f64>(
-            max_cols,
+            limits.cols,
             par,
             Default::default(),
         );
         Work {
             local: vec![usize::MAX; size],
-            row_idx: Vec::new(),
-            col_idx: Vec::new(),
+            upd: Scratch::new(limits),
             mem: MemBuffer::new(req),
+        }
+    }
+}
+
+/// The sizes of the working arrays: the columns of the largest supernode, and of the largest
+/// with rows below it (a descendant), and the largest pattern (rows below a supernode).
+#[derive(Clone, Copy)]
+struct Limits {
+    cols: usize,
+    desc_cols: usize,
+    rows: usize,
+}
+
+/// An update's product is formed in blocks of at most `UPDATE_ROWS × UPDATE_COLS` (256 KiB,
+/// which the scatter reads back from the cache it was written to).
+const UPDATE_COLS: usize = 128;
+const UPDATE_ROWS: usize = 256;
+
+/// The scratch of one update (sized once, from [`Limits`]): the local rows and columns of `s`
+/// that it writes, `L_d,cols D_d` for one block of columns and one block of the product.
+struct Scratch {
+    row_idx: Vec<usize>,
+    col_idx: Vec<usize>,
+    scaled: Vec<f64>,
+    prod: Vec<f64>,
+}
+
+impl Scratch {
+    fn new(limits: Limits) -> Scratch {
+        let cols = UPDATE_COLS.min(limits.rows);
+        Scratch {
+            row_idx: Vec::with_capacity(limits.rows),
+            col_idx: Vec::with_capacity(limits.rows),
+            scaled: vec![0.0; limits.desc_cols * cols],
+            prod: vec![0.0; UPDATE_ROWS.min(limits.rows) * cols],
+        }
+    }
+}
+
+/// One value per rayon thread, made on its first use there.
+struct PerThread<T>(Vec<std::sync::Mutex<Option<T>>>);
+
+impl<T> PerThread<T> {
+    fn new() -> Self {
+        PerThread(
+            (0..rayon::current_num_threads().max(1))
+                .map(|_| std::sync::Mutex::new(None))
+                .collect(),
+        )
+    }
+
+    /// `f` of this thread's value (made by `make` on first use); of a fresh one should a task
+    /// already hold it (a task here calls nothing that lets rayon start another on its
+    /// thread, so this is not expected).
+    fn with<R>(&self, make: impl FnOnce() -> T, f: impl FnOnce(&mut T) -> R) -> R {
+        use std::sync::TryLockError;
+        let i = rayon::current_thread_index().unwrap_or(0) % self.0.len();
+        match self.0[i].try_lock() {
+            Ok(mut held) => f(held.get_or_insert_with(make)),
+            Err(TryLockError::Poisoned(e)) => f(e.into_inner().get_or_insert_with(make)),
+            Err(TryLockError::WouldBlock) => f(&mut make()),
         }
     }
 }
@@ -427,32 +451,29 @@ impl Work {
 /// that block as its descendants left it, less the elimination of the supernode's own
 /// columns before `n` (a rank update instead of the product `L_MM D_MM L_MMᵀ`), with the
 /// wall time of that block (its updates, the elimination and its `L D Lᵀ`, in seconds).
-///
-/// # Panics
-/// Where [`available`] is false.
 pub fn factorise(
     st: &Structure,
     a: LowerCsc,
     l: &mut [f64],
     par: Par,
-    schur_from: Option<(usize, Option<faer::Mat<f64>>)>,
+    schur_from: Option<usize>,
 ) -> Result<Option<(faer::Mat<f64>, f64)>, usize> {
     use rayon::prelude::*;
-    assert!(
-        available(),
-        "the supernodal update kernel needs AVX2 and FMA"
-    );
     let nsup = st.n_supernodes();
     let size = *st.begin.last().unwrap_or(&0);
     assert_eq!(l.len(), *st.val_ptr.last().unwrap_or(&0));
-    assert_eq!(a.col_ptr.len(), size + 1);
+    assert!(a.parts.iter().all(|p| p.col_ptr.len() == size + 1));
     st.check();
     debug_assert!(l.iter().step_by(4096).all(|&x| x == 0.0), "zeros on entry");
     let schedule = Schedule::of(st);
-    let max_cols = (0..nsup).map(|s| st.ncols(s)).max().unwrap_or(0);
-    let values = Values {
-        ptr: l.as_mut_ptr(),
-        len: l.len(),
+    let limits = Limits {
+        cols: (0..nsup).map(|s| st.ncols(s)).max().unwrap_or(0),
+        desc_cols: (0..nsup)
+            .filter(|&s| !st.pattern(s).is_empty())
+            .map(|s| st.ncols(s))
+            .max()
+            .unwrap_or(0),
+        rows: (0..nsup).map(|s| st.pattern(s).len()).max().unwrap_or(0),
     };
     // The Schur complement of the trailing columns `n..`, where they end the last
     // supernode (the root: the dense block of the constraint rows, with or without the top
@@ -460,62 +481,68 @@ pub fn factorise(
     let last = nsup.checked_sub(1);
     let mut schur = schur_from
         .zip(last)
-        .filter(|((n, _), s)| *n < size && st.begin[*s] <= *n && st.pattern(*s).is_empty())
-        .map(|((n, spare), s)| Schur {
+        .filter(|(n, s)| *n < size && st.begin[*s] <= *n && st.pattern(*s).is_empty())
+        .map(|(n, s)| Schur {
             s,
             kk: n - st.begin[s],
             w: None,
-            spare,
             seconds: 0.0,
         });
+    // Every supernode's values apart, and each subtree's handed to its task (in the order of
+    // its list): a task writes the values of its own supernodes and reads only theirs.
+    let mut pieces: Vec<Option<&mut [f64]>> = Vec::with_capacity(nsup);
+    let mut rest = &mut *l;
+    for s in 0..nsup {
+        let (piece, after) =
+            std::mem::take(&mut rest).split_at_mut(st.val_ptr[s + 1] - st.val_ptr[s]);
+        pieces.push(Some(piece));
+        rest = after;
+    }
+    let tasks: Vec<(&[usize], Vec<&mut [f64]>)> = schedule
+        .subtrees
+        .iter()
+        .map(|nodes| {
+            let values = nodes
+                .iter()
+                .map(|&s| pieces[s].take().expect("in one subtree"));
+            (&nodes[..], values.collect())
+        })
+        .collect();
+    drop(pieces);
     // One set of working arrays per thread that runs a subtree (the row map alone is 8 bytes
     // per row), made on its first subtree.
-    let works: Vec<std::sync::Mutex<Option<Work>>> = (0..rayon::current_num_threads().max(1))
-        .map(|_| std::sync::Mutex::new(None))
-        .collect();
+    let works = PerThread::new();
     // The subtrees, each on one thread; the first failure by supernode is the one reported.
-    let failed = schedule
-        .subtrees
-        .par_iter()
-        .map(|nodes| {
-            let i = rayon::current_thread_index().unwrap_or(0) % works.len();
-            // This thread's arrays; fresh ones should it ever run two subtrees at once (a
-            // subtree's work calls nothing that lets rayon start another task on its thread).
-            let mut own;
-            let mut fresh;
-            let slot: &mut Option<Work> = match works[i].try_lock() {
-                Ok(w) => {
-                    own = w;
-                    &mut own
-                }
-                Err(std::sync::TryLockError::Poisoned(e)) => {
-                    own = e.into_inner();
-                    &mut own
-                }
-                Err(std::sync::TryLockError::WouldBlock) => {
-                    fresh = None;
-                    &mut fresh
-                }
-            };
-            let work = slot.get_or_insert_with(|| Work::new(size, max_cols, Par::Seq));
-            for &s in nodes {
-                // SAFETY: this task alone factorises the subtree's supernodes, whose
-                // descendants are in the subtree and earlier in `nodes`.
-                unsafe {
-                    supernode(
-                        st,
-                        Some(&a),
-                        &schedule,
-                        &values,
-                        s,
-                        work,
-                        Par::Seq,
-                        false,
-                        None,
-                    )?
-                };
-            }
-            Ok(())
+    let failed = tasks
+        .into_par_iter()
+        .map(|(nodes, mut values)| {
+            works.with(
+                || Work::new(size, limits, Par::Seq),
+                |work| {
+                    for (i, &s) in nodes.iter().enumerate() {
+                        // The subtree holds `s`'s descendants (`Schedule::of`), earlier in it.
+                        let (done, rest) = values.split_at_mut(i);
+                        let finished = Finished::Subtree {
+                            nodes,
+                            slot: &schedule.slot,
+                            values: done,
+                        };
+                        supernode(
+                            st,
+                            Some(&a),
+                            &schedule,
+                            &finished,
+                            rest[0],
+                            s,
+                            work,
+                            Par::Seq,
+                            None,
+                            None,
+                        )?;
+                    }
+                    Ok(())
+                },
+            )
         })
         .filter_map(Result::err)
         .min();
@@ -528,133 +555,112 @@ pub fn factorise(
         schedule.subtrees.len(),
         schedule.top.len()
     ));
-    let mut work = Work::new(size, max_cols, par);
+    let mut work = Work::new(size, limits, par);
+    let pool = PerThread::new();
     let mut a = Some(a);
     for &s in &schedule.top {
+        // Every descendant of `s` comes before it (its rows are below its columns).
+        let (done, rest) = l.split_at_mut(st.val_ptr[s]);
+        let ls = &mut rest[..st.val_ptr[s + 1] - st.val_ptr[s]];
         if schur.as_ref().is_some_and(|w| w.s == s) {
             // The root, last: its columns of `a` now, and `a` freed before its dense block
             // is worked on (the peak memory of the run at L7).
             let root = a.take().expect("the root is the last supernode");
-            // SAFETY: the root is this task's, and has no off-diagonal rows.
-            scatter(st, &root, s, &work.local, unsafe {
-                values.get_mut(st.val_ptr[s]..st.val_ptr[s + 1])
-            });
+            scatter(st, &root, s, &work.local, ls);
         }
-        // SAFETY: the top supernodes one after the other, after every subtree.
-        unsafe {
-            supernode(
-                st,
-                a.as_ref(),
-                &schedule,
-                &values,
-                s,
-                &mut work,
-                par,
-                true,
-                schur.as_mut().filter(|w| w.s == s),
-            )?
+        let finished = Finished::Prefix {
+            val_ptr: st.val_ptr,
+            values: done,
         };
+        supernode(
+            st,
+            a.as_ref(),
+            &schedule,
+            &finished,
+            ls,
+            s,
+            &mut work,
+            par,
+            Some((&pool, limits)),
+            schur.as_mut().filter(|w| w.s == s),
+        )?;
     }
     Ok(schur.and_then(|w| w.w.map(|m| (m, w.seconds))))
 }
 
-/// Factorises supernode `s`: its columns of `a`, the updates of its descendants in ascending
-/// order, its dense `L D Lᵀ`, the solve of its off-diagonal rows and their scaling by `D⁻¹`.
-/// With `split`, the updates are applied on rayon's threads, each on a range of the columns.
-///
-/// # Safety
-/// Every descendant of `s` is factorised, and no other task touches `s`'s values or reads
-/// them.
+/// Factorises supernode `s` into its values `ls`: its columns of `a`, the updates of its
+/// descendants (`finished`) in ascending order, its dense `L D Lᵀ`, the solve of its
+/// off-diagonal rows and their scaling by `D⁻¹`. With `split` (scratch for each thread), the
+/// updates are applied on rayon's threads, each on a range of the columns.
 #[allow(clippy::too_many_arguments)]
-unsafe fn supernode(
+fn supernode(
     st: &Structure,
     a: Option<&LowerCsc>,
     schedule: &Schedule,
-    values: &Values,
+    finished: &Finished,
+    ls: &mut [f64],
     s: usize,
     work: &mut Work,
     par: Par,
-    split: bool,
+    split: Option<(&PerThread<Scratch>, Limits)>,
     schur: Option<&mut Schur>,
 ) -> Result<(), usize> {
     let (s_start, s_end) = (st.begin[s], st.begin[s + 1]);
     let s_pattern = st.pattern(s);
     let s_ncols = s_end - s_start;
     let s_nrows = s_ncols + s_pattern.len();
+    assert_eq!(ls.len(), s_nrows * s_ncols);
     for (i, &row) in s_pattern.iter().enumerate() {
         work.local[row] = i + s_ncols;
     }
-    // SAFETY: `s`'s values are this task's (the caller's contract).
-    let ls = unsafe { values.get_mut(st.val_ptr[s]..st.val_ptr[s + 1]) };
     if let Some(a) = a {
         scatter(st, a, s, &work.local, ls);
     }
     let desc = schedule.descendants(s);
-    let ls_ptr = Values {
-        ptr: ls.as_mut_ptr(),
-        len: ls.len(),
-    };
-    // The descendants' updates of the columns `c0..c1`.
-    let columns = |(c0, c1): (usize, usize),
-                   local: &[usize],
-                   row_idx: &mut Vec<usize>,
-                   col_idx: &mut Vec<usize>| {
-        for &d in desc {
-            // SAFETY: the tasks write disjoint columns of `s`; the descendants are finished.
-            unsafe {
-                update(
-                    st,
-                    values,
-                    &ls_ptr,
-                    s,
-                    d as usize,
-                    local,
-                    row_idx,
-                    col_idx,
-                    (c0, c1),
-                )
-            };
-        }
-    };
+    // The descendants' updates of the columns `c0..c1` (their values `cols`).
+    let columns =
+        |(c0, c1): (usize, usize), cols: &mut [f64], local: &[usize], scratch: &mut Scratch| {
+            for &d in desc {
+                let d = d as usize;
+                update(st, finished.get(d), cols, s, d, local, scratch, (c0, c1));
+            }
+        };
     // The updates of the columns `c0..c1`, with `split` on rayon's threads in ranges of
     // about equal area (each element still takes its updates in the same order).
-    let updates = |(c0, c1): (usize, usize), work: &mut Work| {
+    let updates = |(c0, c1): (usize, usize), ls: &mut [f64], work: &mut Work| {
         if c0 == c1 {
             return;
         }
-        let chunks: Vec<(usize, usize)> = if split && c1 - c0 >= SPLIT_COLUMNS {
-            column_chunks(
-                c1 - c0,
-                s_nrows - c0,
-                4 * rayon::current_num_threads().max(1),
-            )
-            .into_iter()
-            .map(|(a, b)| (a + c0, b + c0))
-            .collect()
-        } else {
-            vec![(c0, c1)]
-        };
-        if chunks.len() > 1 {
-            use rayon::prelude::*;
-            let local = &work.local;
-            chunks.par_iter().for_each_init(
-                || (Vec::new(), Vec::new()),
-                |(row_idx, col_idx), &range| columns(range, local, row_idx, col_idx),
-            );
-        } else {
-            columns((c0, c1), &work.local, &mut work.row_idx, &mut work.col_idx);
+        let cols = &mut ls[c0 * s_nrows..c1 * s_nrows];
+        match split.filter(|_| c1 - c0 >= SPLIT_COLUMNS) {
+            Some((pool, limits)) => {
+                use rayon::prelude::*;
+                let mut rest = cols;
+                let parts: Vec<_> = column_chunks(c1 - c0, s_nrows - c0, SPLIT_PARTS)
+                    .into_iter()
+                    .map(|(a, b)| {
+                        let (part, after) =
+                            std::mem::take(&mut rest).split_at_mut((b - a) * s_nrows);
+                        rest = after;
+                        ((a + c0, b + c0), part)
+                    })
+                    .collect();
+                let local = &work.local;
+                parts.into_par_iter().for_each(|(range, part)| {
+                    pool.with(
+                        || Scratch::new(limits),
+                        |scratch| columns(range, part, local, scratch),
+                    )
+                });
+            }
+            None => columns((c0, c1), cols, &work.local, &mut work.upd),
         }
-    };
-    // SAFETY (each `block`): the updates are finished when it is called.
-    let block = || {
-        let ls = unsafe { ls_ptr.get_mut(0..ls_ptr.len) };
-        MatMut::from_column_major_slice_mut(ls, s_nrows, s_ncols)
     };
     let factored = match schur {
         None => {
-            updates((0, s_ncols), work);
+            updates((0, s_ncols), ls, work);
             ldlt(
-                block().split_at_row_mut(s_ncols).0,
+                block(ls, s_nrows, s_ncols).split_at_row_mut(s_ncols).0,
                 par,
                 MemStack::new(&mut work.mem),
             )
@@ -662,15 +668,23 @@ unsafe fn supernode(
         Some(w) => {
             // The root: its separator columns first (they need only their own updates), then
             // the constraint block, timed apart.
-            updates((0, w.kk), work);
-            w.factorise_leading(block(), par, MemStack::new(&mut work.mem))
-                .and_then(|()| {
-                    let t = std::time::Instant::now();
-                    updates((w.kk, s_ncols), work);
-                    let r = w.factorise_block(block(), par, MemStack::new(&mut work.mem));
-                    w.seconds = t.elapsed().as_secs_f64();
-                    r
-                })
+            updates((0, w.kk), ls, work);
+            w.factorise_leading(
+                block(ls, s_nrows, s_ncols),
+                par,
+                MemStack::new(&mut work.mem),
+            )
+            .and_then(|()| {
+                let t = std::time::Instant::now();
+                updates((w.kk, s_ncols), ls, work);
+                let r = w.factorise_block(
+                    block(ls, s_nrows, s_ncols),
+                    par,
+                    MemStack::new(&mut work.mem),
+                );
+                w.seconds = t.elapsed().as_secs_f64();
+                r
+            })
         }
     };
     if let Err(index) = factored {
@@ -679,7 +693,7 @@ unsafe fn supernode(
         }
         return Err(index + s_start);
     }
-    let (mut top, mut bot) = block().split_at_row_mut(s_ncols);
+    let (mut top, mut bot) = block(ls, s_nrows, s_ncols).split_at_row_mut(s_ncols);
     for j in 0..s_ncols {
         for i in 0..j {
             top[(i, j)] = 0.0;
@@ -690,6 +704,11 @@ unsafe fn supernode(
         work.local[row] = usize::MAX;
     }
     Ok(())
+}
+
+/// A supernode's values `ls` as its `nrows × ncols` column-major block.
+fn block(ls: &mut [f64], nrows: usize, ncols: usize) -> MatMut<'_, f64> {
+    MatMut::from_column_major_slice_mut(ls, nrows, ncols)
 }
 
 /// faer's dense `L D Lᵀ` of `a` in place: `Err(column)` at a zero pivot.
@@ -724,8 +743,6 @@ struct Schur {
     s: usize,
     kk: usize,
     w: Option<faer::Mat<f64>>,
-    /// An array for `w` made earlier ([`crate::la::par::Spare`]), if any.
-    spare: Option<faer::Mat<f64>>,
     /// Wall time of the constraint block: the updates of its columns, the elimination of the
     /// leading columns from it and its `L D Lᵀ`.
     seconds: f64,
@@ -806,14 +823,16 @@ fn scatter(st: &Structure, a: &LowerCsc, s: usize, local: &[usize], ls: &mut [f6
     let s_nrows = (s_end - s_start) + st.pattern(s).len();
     for j in s_start..s_end {
         let col = (j - s_start) * s_nrows;
-        for p in a.col_ptr[j]..a.col_ptr[j + 1] {
-            let i = a.row_idx[p] as usize;
-            if i < j {
-                continue;
+        for part in &a.parts {
+            for p in part.col_ptr[j] as usize..part.col_ptr[j + 1] as usize {
+                let i = part.row_idx[p] as usize;
+                if i < j {
+                    continue;
+                }
+                let ix = if i >= s_end { local[i] } else { i - s_start };
+                assert!(ix < s_nrows, "an entry outside supernode {s}'s pattern");
+                ls[col + ix] += part.values[p];
             }
-            let ix = if i >= s_end { local[i] } else { i - s_start };
-            assert!(ix < s_nrows, "an entry outside supernode {s}'s pattern");
-            ls[col + ix] += a.values[p];
         }
     }
 }
@@ -836,24 +855,33 @@ fn column_chunks(ncols: usize, nrows: usize, parts: usize) -> Vec<(usize, usize)
     out
 }
 
-/// The update of supernode `s` by its descendant `d`, restricted to `s`'s columns
-/// `c0..c1` (all of them: faer's own call): `L_s −= L_d,rows D_d L_d,colsᵀ` on the lower
-/// triangle, with faer's gather-scatter kernel on one thread.
+/// The update of supernode `s` by its descendant `d`, restricted to `s`'s columns `c0..c1`:
 ///
-/// # Safety
-/// `d` is finished and no other task touches `s`'s columns `c0..c1`.
+/// ```text
+/// L_s[r, c] −= Σ_k L_d[r, k] D_d[k] L_d[c, k]     r ≥ c, both rows of d's pattern,
+///                                               c among s's columns c0..c1
+/// ```
+///
+/// (`r`, `c` mapped to `s`'s local rows and columns). The product is formed by faer's matrix
+/// product, sequentially, in blocks of [`UPDATE_COLS`] columns `c` (with the rows `r` from the
+/// block's first column down, in blocks of [`UPDATE_ROWS`]) into `scratch`, and each block is
+/// subtracted from `L_s` at once (its lower part). The blocks depend on the update's shape
+/// alone, so an element's value does not depend on the thread that computes it.
+///
+/// `ld` holds `d`'s values, `ls` those of `s`'s columns `c0..c1`.
 #[allow(clippy::too_many_arguments)]
-unsafe fn update(
+fn update(
     st: &Structure,
-    values: &Values,
-    ls: &Values,
+    ld: &[f64],
+    ls: &mut [f64],
     s: usize,
     d: usize,
     local: &[usize],
-    row_idx: &mut Vec<usize>,
-    col_idx: &mut Vec<usize>,
+    scratch: &mut Scratch,
     (c0, c1): (usize, usize),
 ) {
+    use faer::linalg::matmul::matmul;
+    use faer::{Accum, MatMut, MatRef};
     let (s_start, s_end) = (st.begin[s], st.begin[s + 1]);
     let s_nrows = (s_end - s_start) + st.pattern(s).len();
     let d_pattern = st.pattern(d);
@@ -865,6 +893,12 @@ unsafe fn update(
     if mid == 0 {
         return;
     }
+    let Scratch {
+        row_idx,
+        col_idx,
+        scaled,
+        prod,
+    } = scratch;
     row_idx.clear();
     row_idx.extend(
         d_pattern[lo..]
@@ -872,69 +906,166 @@ unsafe fn update(
             .map(|&r| if r < s_end { r - s_start } else { local[r] }),
     );
     col_idx.clear();
-    col_idx.extend(d_pattern[lo..lo + mid].iter().map(|&r| r - s_start));
+    col_idx.extend(d_pattern[lo..lo + mid].iter().map(|&r| r - s_start - c0));
     // Every row inside `s`'s block (a row of `d` below `s` that is not in `s`'s pattern would
-    // be written outside it), as faer's call asserts.
+    // be written outside it).
     assert!(
         row_idx.iter().all(|&r| r < s_nrows),
         "supernode {d}'s rows are not in supernode {s}'s pattern"
     );
-    // SAFETY: `d` is finished (the caller's contract).
-    let ld = unsafe { values.get(st.val_ptr[d]..st.val_ptr[d + 1]) };
+    assert_eq!(ld.len(), d_nrows * d_ncols);
+    assert_eq!(ls.len(), (c1 - c0) * s_nrows);
     let nrows = d_pattern.len() - lo;
-    let alpha = -1.0f64;
-    #[cfg(target_arch = "x86_64")]
-    {
-        use private_gemm_x86::{Accum, DType, DstKind, IType};
-        let instr = instruction_set().expect("checked by `factorise`");
-        // SAFETY: the kernel reads `nrows × d_ncols` values of `L_d` from its row
-        // `d_ncols + lo`, `mid` of them from the same row, the diagonal of its leading block,
-        // and adds to `s`'s values at the rows `row_idx` and columns `col_idx` (within its
-        // `s_nrows × s_ncols` block: each local row below `s_nrows`, each column below
-        // `c1`), which this task alone writes (the caller's contract).
-        unsafe {
-            private_gemm_x86::gemm(
-                DType::F64,
-                if size_of::<usize>() == 8 {
-                    IType::U64
-                } else {
-                    IType::U32
-                },
-                instr,
-                nrows,
-                mid,
-                d_ncols,
-                ls.ptr as *mut (),
-                1,
-                s_nrows as isize,
-                row_idx.as_ptr() as *const (),
-                col_idx.as_ptr() as *const (),
-                DstKind::Lower,
-                Accum::Add,
-                ld.as_ptr().add(d_ncols + lo) as *const (),
-                1,
-                d_nrows as isize,
-                false,
-                ld.as_ptr() as *const (),
-                d_nrows as isize + 1,
-                ld.as_ptr().add(d_ncols + lo) as *const (),
-                d_nrows as isize,
-                1,
-                true,
-                &raw const alpha as *const (),
-                1,
-            );
+    // `L_d`'s rows from the first in `c0..c1` down (`nrows × d_ncols`, column stride
+    // `d_nrows`), its column `k` starting at `first(k)`.
+    let first = |k: usize| k * d_nrows + d_ncols + lo;
+    let below =
+        MatRef::from_column_major_slice_with_stride(&ld[first(0)..], nrows, d_ncols, d_nrows);
+    for j0 in (0..mid).step_by(UPDATE_COLS) {
+        let w = (mid - j0).min(UPDATE_COLS);
+        // `L_d[j0..j0 + w, :] D_d` (`w × d_ncols`, column-major).
+        let scaled = &mut scaled[..w * d_ncols];
+        for (k, col) in scaled.chunks_exact_mut(w).enumerate() {
+            let dk = ld[k * d_nrows + k];
+            for (x, &v) in col.iter_mut().zip(&ld[first(k) + j0..][..w]) {
+                *x = v * dk;
+            }
         }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = (ld, nrows, alpha, ls, s_nrows);
-        unreachable!("`available` is false off x86-64");
+        let rhs = MatRef::from_column_major_slice(&*scaled, w, d_ncols).transpose();
+        for i0 in (j0..nrows).step_by(UPDATE_ROWS) {
+            let h = (nrows - i0).min(UPDATE_ROWS);
+            let prod = &mut prod[..h * w];
+            matmul(
+                MatMut::from_column_major_slice_mut(&mut *prod, h, w),
+                Accum::Replace,
+                below.subrows(i0, h),
+                rhs,
+                1.0,
+                Par::Seq,
+            );
+            // Column `j0 + j` takes the rows from its own down.
+            for (j, p) in prod.chunks_exact(h).enumerate() {
+                let from = (j0 + j).max(i0);
+                let c = col_idx[j0 + j];
+                let dst = &mut ls[c * s_nrows..(c + 1) * s_nrows];
+                for (&r, &x) in row_idx[from..i0 + h].iter().zip(&p[from - i0..]) {
+                    dst[r] -= x;
+                }
+            }
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
+    /// A dense symmetric positive-definite matrix as two supernodes (5 columns, then 595
+    /// whose updates are split): the update of the second by the first spans several blocks
+    /// of columns and of rows; the factor reproduces the matrix to a backward error near the
+    /// unit round-off, as faer's dense `L D Lᵀ` does, and is the same bits on one and two
+    /// threads.
+    #[test]
+    fn a_dense_matrix_in_two_supernodes_gives_the_dense_factor() {
+        use faer::Mat;
+        let (n, k) = (600, 5);
+        assert!(n - k > 2 * super::UPDATE_ROWS.max(super::UPDATE_COLS));
+        let b = Mat::from_fn(n, 8, |i, j| {
+            (((i * 37 + j * 101) % 61) as f64 - 30.0) / 30.0
+        });
+        let a = Mat::from_fn(n, n, |i, j| {
+            (0..8).map(|t| b[(i, t)] * b[(j, t)]).sum::<f64>() + if i == j { 2.0 } else { 0.0 }
+        });
+        // The upper triangle in compressed columns.
+        let col_ptr: Vec<usize> = (0..=n).map(|j| j * (j + 1) / 2).collect();
+        let row_idx: Vec<usize> = (0..n).flat_map(|j| 0..=j).collect();
+        let value = |p: usize| {
+            let j = col_ptr.partition_point(|&q| q <= p) - 1;
+            a[(row_idx[p], j)]
+        };
+        let fwd: Vec<usize> = (0..n).collect();
+        let rows: Vec<usize> = (k..n).collect();
+        let (begin, row_ptr) = ([0, k, n], [0, n - k, n - k]);
+        let val_ptr = [0, k * n, k * n + (n - k) * (n - k)];
+        let st = super::Structure {
+            begin: &begin,
+            row_ptr: &row_ptr,
+            rows: &rows,
+            val_ptr: &val_ptr,
+        };
+        let factor = |threads: usize| {
+            let mut l = vec![0.0; val_ptr[2]];
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let lower = super::LowerCsc::permuted(&col_ptr, &row_idx, value, &fwd);
+                    super::factorise(&st, lower, &mut l, faer::Par::Seq, None).unwrap()
+                });
+            l
+        };
+        let l = factor(1);
+        let l2 = factor(2);
+        assert!(l.iter().zip(&l2).all(|(x, y)| x.to_bits() == y.to_bits()));
+        let mut dense = a.clone();
+        super::ldlt(
+            dense.as_mut(),
+            faer::Par::Seq,
+            faer::dyn_stack::MemStack::new(&mut faer::dyn_stack::MemBuffer::new(
+                faer::linalg::cholesky::ldlt::factor::cholesky_in_place_scratch::<f64>(
+                    n,
+                    faer::Par::Seq,
+                    Default::default(),
+                ),
+            )),
+        )
+        .unwrap();
+        // Column `j` of the factor in the supernodal values, from its diagonal down.
+        let ours = |j: usize| -> &[f64] {
+            if j < k {
+                &l[j * n + j..(j + 1) * n]
+            } else {
+                let m = n - k;
+                &l[val_ptr[1] + (j - k) * m + (j - k)..val_ptr[1] + (j - k + 1) * m]
+            }
+        };
+        let (mut diff2, mut norm2) = (0.0, 0.0);
+        for j in 0..n {
+            for (i, x) in (j..n).zip(ours(j)) {
+                diff2 += (x - dense[(i, j)]).powi(2);
+                norm2 += dense[(i, j)].powi(2);
+            }
+        }
+        let relative = (diff2 / norm2).sqrt();
+        // ‖A − L D Lᵀ‖_F / ‖A‖_F of a factor given by its columns.
+        let residual = |col: &dyn Fn(usize) -> Vec<f64>| {
+            let cols: Vec<Vec<f64>> = (0..n).map(col).collect();
+            let (mut r2, mut a2) = (0.0, 0.0);
+            for j in 0..n {
+                for i in j..n {
+                    let mut x = 0.0;
+                    for t in 0..=j {
+                        let (li, lj) = (cols[t][i - t], cols[t][j - t]);
+                        let (li, lj) =
+                            (if i == t { 1.0 } else { li }, if j == t { 1.0 } else { lj });
+                        x += li * cols[t][0] * lj;
+                    }
+                    r2 += (a[(i, j)] - x).powi(2);
+                    a2 += a[(i, j)].powi(2);
+                }
+            }
+            (r2 / a2).sqrt()
+        };
+        let eta = residual(&|j| ours(j).to_vec());
+        let eta_dense = residual(&|j| (j..n).map(|i| dense[(i, j)]).collect());
+        // Measured: 7.0e-16 and 5.3e-16 for faer's dense factor; the factors 2.7e-15 apart
+        // (the matrix's condition number is about 10³).
+        assert!(
+            eta <= 2e-15,
+            "backward error {eta:e} (the dense factor's {eta_dense:e})"
+        );
+        assert!(relative <= 1e-14, "{relative:e} from the dense factor");
+    }
+
     #[test]
     fn column_chunks_tile_the_columns() {
         for (ncols, nrows, parts) in [(1, 1, 8), (32, 40, 8), (1000, 4000, 8), (33, 33, 2)] {

@@ -14,8 +14,7 @@ use faer::sparse::SparseColMatRef;
 /// asks for faer's own loop (for comparisons: the same factor, but `W` formed by the product
 /// rather than copied from the factorisation, so different last bits downstream).
 pub fn tree_scheduled() -> bool {
-    crate::la::supernodal::available()
-        && std::env::var("STICKSLIP_FACTOR").map_or(true, |v| v != "faer")
+    std::env::var("STICKSLIP_FACTOR").map_or(true, |v| v != "faer")
 }
 
 /// The sparsity pattern and symbolic analysis of the saddle-point matrix of a contact model,
@@ -296,7 +295,7 @@ impl SaddleSymbolic {
                 rows: &self.layout.rows,
                 val_ptr: &self.layout.val_ptr,
             };
-            schur = crate::la::supernodal::factorise(&st, lower, l, par, Some((n, None)))
+            schur = crate::la::supernodal::factorise(&st, lower, l, par, Some(n))
                 .map_err(|pivot| FactorError::NotPositiveDefinite { pivot, n })?;
             if schur.is_none() {
                 crate::trace::mark("factor: constraint block not in the root (W by the product)");
