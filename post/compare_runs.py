@@ -8,6 +8,12 @@ timings), `history.csv` and `energy.csv` without the `wall_s` column, the journa
 the program's identity (`id`: two builds differ in it by design). Prints every file that
 differs and the count; exits 1 if any does.
 
+With `--rtol X`, numbers need only agree within X of the largest magnitude of their CSV column
+(or, in JSON, of the two numbers, at least 1), or within `--atol Y` absolutely (for columns of
+round-off around zero, such as a pilot displacement that symmetry makes zero), and the files
+that differ only so are counted with their largest such difference; for a change that moves
+the last bits (another order of summation in a kernel).
+
 Used to check that a restructure leaves the output of the shipped cases unchanged:
 
     for c in cases/*.json; do n=$(basename $c .json)
@@ -32,6 +38,78 @@ def strip(d):
     return d
 
 
+RTOL = None
+ATOL = 0.0
+WORST = {}
+
+
+def close(a, b, scale):
+    """Whether two parsed values agree within RTOL of `scale` (recording the difference)."""
+    if isinstance(a, bool) or isinstance(b, bool) or not all(isinstance(x, (int, float)) for x in (a, b)):
+        return a == b
+    if abs(a - b) <= ATOL:
+        return True
+    d = abs(a - b) / max(scale, 1e-300)
+    WORST[CURRENT[0]] = max(WORST.get(CURRENT[0], 0.0), d)
+    return d <= RTOL
+
+
+CURRENT = [""]
+
+
+def same_json(a, b):
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(same_json(a[k], b[k]) for k in a)
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(same_json(x, y) for x, y in zip(a, b))
+    if RTOL is not None and isinstance(a, (int, float)) and isinstance(b, (int, float)):
+        return close(a, b, max(abs(a), abs(b), 1.0))
+    return a == b
+
+
+def num(x):
+    try:
+        return float(x)
+    except ValueError:
+        return x
+
+
+def same_csv(ra, rb):
+    if RTOL is None or len(ra) != len(rb) or any(len(x) != len(y) for x, y in zip(ra, rb)):
+        return ra == rb
+    cols = list(zip(*[[num(c) for c in r] for r in ra[1:]])) if len(ra) > 1 else []
+    scale = [max((abs(v) for v in c if isinstance(v, float)), default=1.0) for c in cols]
+    ok = ra[0] == rb[0]
+    for x, y in zip(ra[1:], rb[1:]):
+        for k, (p, q) in enumerate(zip(x, y)):
+            p, q = num(p), num(q)
+            if isinstance(p, float) and isinstance(q, float):
+                ok &= close(p, q, scale[k])
+            else:
+                ok &= p == q
+    return ok
+
+
+def same_vtu(pa, pb):
+    """`.vtu` files (uncompressed): integer arrays equal, float arrays within RTOL of their
+    largest value (post/vtu_diff.py reads them)."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from vtu_diff import arrays
+    a, b = arrays(pa), arrays(pb)
+    if a.keys() != b.keys():
+        return False
+    ok = True
+    for k in a:
+        if a[k].shape != b[k].shape:
+            return False
+        if a[k].dtype.kind != "f":
+            ok &= bool((a[k] == b[k]).all())
+        elif a[k].size:
+            scale = float(abs(a[k]).max()) or 1.0
+            ok &= close(0.0, float(abs(a[k] - b[k]).max()), scale)
+    return ok
+
+
 def csv_rows(path):
     rows = [line.split(",") for line in open(path).read().splitlines()]
     if rows and "wall_s" in rows[0]:
@@ -41,9 +119,17 @@ def csv_rows(path):
 
 
 def main():
-    if len(sys.argv) != 3:
+    global RTOL, ATOL
+    args = sys.argv[1:]
+    while len(args) > 2 and args[0] in ("--rtol", "--atol"):
+        if args[0] == "--rtol":
+            RTOL = float(args[1])
+        else:
+            ATOL = float(args[1])
+        args = args[2:]
+    if len(args) != 2:
         sys.exit(__doc__)
-    a, b = sys.argv[1], sys.argv[2]
+    a, b = args
     bad = 0
     for case in sorted(c for c in os.listdir(a) if os.path.isdir(os.path.join(a, c))):
         da, db = os.path.join(a, case), os.path.join(b, case)
@@ -55,23 +141,32 @@ def main():
             continue
         for f in fa:
             pa, pb = os.path.join(da, f), os.path.join(db, f)
+            CURRENT[0] = f"{case}/{f}"
             if f.startswith("state_") and f.endswith(".json"):
                 ja, jb = json.load(open(pa)), json.load(open(pb))
                 ja.pop("id", None)
                 jb.pop("id", None)
-                same = strip(ja) == strip(jb)
+                same = same_json(strip(ja), strip(jb))
             elif f.endswith(".json"):
-                same = strip(json.load(open(pa))) == strip(json.load(open(pb)))
+                same = same_json(strip(json.load(open(pa))), strip(json.load(open(pb))))
             elif f.endswith(".jsonl"):
                 la, lb = open(pa).read().splitlines(), open(pb).read().splitlines()
-                same = [strip(json.loads(x)) for x in la] == [strip(json.loads(x)) for x in lb]
+                same = len(la) == len(lb) and all(
+                    same_json(strip(json.loads(x)), strip(json.loads(y))) for x, y in zip(la, lb))
             elif f.endswith(".csv"):
-                same = csv_rows(pa) == csv_rows(pb)
+                same = same_csv(csv_rows(pa), csv_rows(pb))
             else:
                 same = filecmp.cmp(pa, pb, shallow=False)
+                if not same and RTOL is not None and f.endswith(".vtu"):
+                    same = same_vtu(pa, pb)
             if not same:
                 print(f"{case}/{f} differs")
                 bad += 1
+    if RTOL is not None:
+        moved = {k: v for k, v in WORST.items() if v > 0}
+        if moved:
+            k = max(moved, key=moved.get)
+            print(f"files with numbers moved within {RTOL:g}: {len(moved)}; largest {moved[k]:.2e} ({k})")
     print(f"differences: {bad}")
     sys.exit(1 if bad else 0)
 
