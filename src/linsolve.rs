@@ -34,8 +34,8 @@ fn sym<'a>(
 
 /// Whether the saddle-point factorisations run on the elimination tree's schedule
 /// ([`crate::supernodal`]), unless `STICKSLIP_FACTOR=faer`
-/// asks for faer's own loop (for comparisons: the same factor, but `W` formed by the product
-/// rather than copied from the factorisation, so different last bits downstream).
+/// asks for faer's own loop (for comparisons: the same factor within round-off, and `W`
+/// formed by the product rather than copied from the factorisation).
 pub fn tree_scheduled() -> bool {
     std::env::var("STICKSLIP_FACTOR").map_or(true, |v| v != "faer")
 }
