@@ -52,10 +52,14 @@ impl WritableSection {
 
     /// The floats, to be written.
     pub fn as_mut_f64(&mut self) -> &mut [f64] {
-        assert!(
-            cfg!(target_endian = "little"),
-            "mapped floats are little-endian words"
-        );
+        // A run-time check: the crate builds on big-endian machines, whose cache is unusable.
+        #[allow(clippy::assertions_on_constants)]
+        {
+            assert!(
+                cfg!(target_endian = "little"),
+                "mapped floats are little-endian words"
+            );
+        }
         let bytes = &mut self.map[self.offset..self.offset + 8 * self.len];
         // Every section starts at a multiple of 8 bytes from the page-aligned start of the file
         // (checked by the cast).
