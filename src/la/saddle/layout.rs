@@ -291,9 +291,7 @@ pub(super) fn sweep_leading_body(
         let (pat, w) = (&node.pattern[..*kp], node.ncols);
         ahead.at(nodes, i);
         for x in x.chunks_exact_mut(size) {
-            // Plain loops, not `extend` over a `map`: the closure's loop was compiled outside
-            // this function, without its AVX2 (perf annotate of `examples/recovery_timing`;
-            // the same bits either way).
+            // Gather the pattern rows of this column, then the dot products with them.
             t.clear();
             for &row in pat {
                 t.push(x[row]);
