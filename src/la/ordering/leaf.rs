@@ -6,11 +6,25 @@ use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::amd;
 
 /// faer's AMD of the pattern `A + Aᵀ` (rows may be unsorted).
+///
+/// # Panics
+/// If faer's AMD runs out of memory or overflows its indices ([`try_amd_order`] says which).
 pub(super) fn amd_order(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Vec<usize> {
+    try_amd_order(n, col_ptr, row_idx)
+        .expect("AMD ordering failed (out of memory or index overflow)")
+}
+
+/// faer's AMD of the pattern `A + Aᵀ` (rows may be unsorted), `fwd[new] = old`; faer's error
+/// where it runs out of memory or overflows its indices.
+pub fn try_amd_order(
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> Result<Vec<usize>, faer::sparse::FaerError> {
     let mut fwd = vec![0usize; n];
     let mut inv = vec![0usize; n];
     if n == 0 {
-        return fwd;
+        return Ok(fwd);
     }
     let a = SymbolicSparseColMatRef::new_unsorted_checked(
         n,
@@ -19,16 +33,16 @@ pub(super) fn amd_order(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Vec<u
         None,
         &row_idx[..col_ptr[n]],
     );
-    let mut mem = MemBuffer::new(amd::order_maybe_unsorted_scratch::<usize>(n, col_ptr[n]));
+    let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(n, col_ptr[n]))
+        .map_err(|_| faer::sparse::FaerError::OutOfMemory)?;
     amd::order_maybe_unsorted(
         &mut fwd,
         &mut inv,
         a,
         Default::default(),
         MemStack::new(&mut mem),
-    )
-    .expect("AMD ordering failed (out of memory or index overflow)");
-    fwd
+    )?;
+    Ok(fwd)
 }
 
 /// Orders `g` (vertices `ids`, increasing, of the compressed graph `top`) by faer's AMD on

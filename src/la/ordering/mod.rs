@@ -46,6 +46,7 @@ mod tests;
 use dissect::dissect;
 use graph::compress;
 use leaf::amd_order;
+pub use leaf::try_amd_order;
 pub use options::NdOptions;
 
 /// Which fill-reducing ordering to compute.

@@ -39,47 +39,6 @@ pub struct SaddleSymbolic {
     pub(super) m: usize,
 }
 
-/// A fill-reducing ordering of the leading `n_lead` columns of an upper CSC pattern (which
-/// are themselves a valid upper CSC pattern): `fwd[new] = old`.
-fn order_leading(
-    n_lead: usize,
-    col_ptr: &[usize],
-    row_idx: &[usize],
-    n: usize,
-) -> Result<Vec<usize>, FactorError> {
-    use faer::dyn_stack::{MemBuffer, MemStack};
-    use faer::sparse::linalg::amd;
-    let mut fwd = vec![0usize; n_lead];
-    let mut inv = vec![0usize; n_lead];
-    if n_lead == 0 {
-        return Ok(fwd);
-    }
-    let a = sym(n_lead, col_ptr, row_idx);
-    let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(
-        n_lead,
-        col_ptr[n_lead],
-    ))
-    .map_err(|_| FactorError::OutOfMemory {
-        what: "the ordering",
-        n,
-    })?;
-    amd::order_maybe_unsorted(
-        &mut fwd,
-        &mut inv,
-        a,
-        Default::default(),
-        MemStack::new(&mut mem),
-    )
-    .map_err(|e| match e {
-        faer::sparse::FaerError::IndexOverflow => FactorError::IndexOverflow { n },
-        _ => FactorError::OutOfMemory {
-            what: "the ordering",
-            n,
-        },
-    })?;
-    Ok(fwd)
-}
-
 impl SaddleSymbolic {
     /// The pattern of `A` from the upper CSC pattern of `K̂` (order `n`) and the rows of `Y`
     /// (free-DOF index, coefficient), and its symbolic analysis: the free DOFs ordered by a
@@ -92,7 +51,15 @@ impl SaddleSymbolic {
     ) -> Result<SaddleSymbolic, FactorError> {
         let fwd = match ordering_choice(n) {
             crate::la::ordering::Ordering::Amd => {
-                order_leading(n, col_ptr, row_idx, n + y_rows.len())?
+                crate::la::ordering::try_amd_order(n, col_ptr, row_idx).map_err(|e| match e {
+                    faer::sparse::FaerError::IndexOverflow => FactorError::IndexOverflow {
+                        n: n + y_rows.len(),
+                    },
+                    _ => FactorError::OutOfMemory {
+                        what: "the ordering",
+                        n: n + y_rows.len(),
+                    },
+                })?
             }
             crate::la::ordering::Ordering::NestedDissection => {
                 crate::la::ordering::nested_dissection(n, col_ptr, row_idx)
