@@ -134,12 +134,36 @@ pub fn assemble_values(
     mesh: &Mesh,
     elems: &[(usize, Material)],
     dofs: &DofMap,
+    pattern: (&[usize], &[usize]),
+    values: &mut [f64],
+) -> Vec<f64> {
+    assemble_shifted(mesh, elems, None, dofs, pattern, values)
+}
+
+/// [`assemble_values`] of `K + M_s`, where element `i` adds its consistent mass
+/// ([`crate::mass::element_mass`]) at density `shift[i]`: the effective stiffness
+/// `K + c M` of an implicit time step with `shift[i] = c ρ_i` (the same pattern as `K`).
+/// The forces of the prescribed values are those of `K + M_s`.
+pub fn assemble_shifted(
+    mesh: &Mesh,
+    elems: &[(usize, Material)],
+    shift: Option<&[f64]>,
+    dofs: &DofMap,
     (col_ptr, row_idx): (&[usize], &[usize]),
     values: &mut [f64],
 ) -> Vec<f64> {
     let kes: Vec<[f64; 144]> = elems
         .par_iter()
-        .map(|(e, mat)| elasticity::element_stiffness(&mesh.tri_coords(*e), mat))
+        .enumerate()
+        .map(|(i, (e, mat))| {
+            let xe = mesh.tri_coords(*e);
+            let mut ke = elasticity::element_stiffness(&xe, mat);
+            if let Some(s) = shift {
+                let m = crate::mass::expand(&crate::mass::element_mass(&xe, s[i]));
+                ke.iter_mut().zip(m).for_each(|(k, m)| *k += m);
+            }
+            ke
+        })
         .collect();
     values.iter_mut().for_each(|v| *v = 0.0);
     let n = dofs.n_free();

@@ -21,6 +21,12 @@ pub struct StepRecord {
     /// The cycle (from 1) of a stage of a cycle group.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cycle: Option<usize>,
+    /// Physical time at the end of a step integrated in time (steps of dynamic stages).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physical_time: Option<f64>,
+    /// Kinetic energy `½ vᵀ M v` at the end of a step integrated in time.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kinetic: Option<f64>,
 }
 
 /// The friction law and the paper's scales of the run (eqs. Maugis, Maugis10, Lambda, s0).

@@ -61,6 +61,9 @@ pub struct Summary {
     /// restart states, `history.csv`, `energy.csv`), counted when `summary.json` is written
     /// (which it does not count).
     pub output_bytes: u64,
+    /// The stages integrated in time (dynamic stages and the event after a lost equilibrium).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub events: Vec<crate::driver::EventSummary>,
 }
 
 /// The self-checks of the last converged step (none when no step converged).
@@ -336,11 +339,16 @@ pub fn friction_summary(
     })
 }
 
-/// `history.csv`: one row per converged step (integer columns printed as integers).
+/// `history.csv`: one row per converged step (integer columns printed as integers). `t` is
+/// the physical time (advanced by the steps integrated in time only) and `kinetic` the kinetic
+/// energy (zero in quasi-static steps).
 pub fn history_csv(records: &[StepRecord]) -> String {
+    // Quasi-static steps take no physical time and are at rest.
+    let mut t = 0.0;
     let rows: Vec<Vec<f64>> = records
         .iter()
         .map(|r| {
+            t = r.physical_time.unwrap_or(t);
             let p = r.pilot.unwrap_or_default();
             let c = r.contact.unwrap_or_default();
             vec![
@@ -366,6 +374,8 @@ pub fn history_csv(records: &[StepRecord]) -> String {
                 r.wall_s,
                 c.mean_slip,
                 r.cycle.unwrap_or(0) as f64,
+                t,
+                r.kinetic.unwrap_or(0.0),
             ]
         })
         .collect();
@@ -393,6 +403,8 @@ pub fn history_csv(records: &[StepRecord]) -> String {
             "wall_s",
             "mean_slip",
             "cycle",
+            "t",
+            "kinetic",
         ],
         &rows,
         &[
@@ -432,6 +444,7 @@ pub fn summarise(
         last_u,
         last_state,
         last_scale,
+        events,
         ..
     } = sim;
     let q_max = records
@@ -486,6 +499,7 @@ pub fn summarise(
         output_dir: out_dir.display().to_string(),
         status,
         energy: None,
+        events,
         cache: model.cache_report(),
         output_bytes: 0,
     };

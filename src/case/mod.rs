@@ -7,9 +7,11 @@
 
 use serde::{Deserialize, Serialize};
 
+mod dynamic;
 mod friction_spec;
 mod stages;
 
+pub use dynamic::{DynamicSpec, MAX_TIME_STEPS, OnLostEquilibrium, RampShape, Until};
 pub use friction_spec::{FrictionKind, FrictionSpec, OLD_SPELLINGS};
 use stages::StageItem;
 pub(crate) use stages::deserialize_stages;
@@ -63,6 +65,10 @@ pub struct Case {
     /// What to write.
     #[serde(default)]
     pub output: Output,
+    /// When a force-controlled tangential load passes the peak: absent, the run stops there
+    /// (exit 5); `{"dynamic": {...}}` integrates the jump in time ([`OnLostEquilibrium`]).
+    #[serde(default)]
+    pub on_lost_equilibrium: Option<OnLostEquilibrium>,
 }
 
 /// A body and its material.
@@ -76,6 +82,10 @@ pub struct Body {
     pub e: f64,
     /// Poisson's ratio ν (−1 < ν < 0.5).
     pub nu: f64,
+    /// Mass density ρ (> 0, mass per unit volume in the units of E and the mesh): required
+    /// where the case integrates in time, unused otherwise.
+    #[serde(default)]
+    pub density: Option<f64>,
 }
 
 /// Prescribed displacement components on a curve group.
@@ -203,7 +213,8 @@ pub struct Stage {
     pub cycle: Option<usize>,
     #[serde(default)]
     pub name: String,
-    /// Number of load steps (≥ 1).
+    /// Number of load steps (≥ 1); absent in a dynamic stage, whose steps are its time steps.
+    #[serde(default)]
     pub steps: usize,
     /// Pilot control at the end of the stage, per component; absent = as at the end of the
     /// previous stage (force 0 at the start).
@@ -214,6 +225,10 @@ pub struct Stage {
     /// Multiplier of the `tractions` at the end of the stage; absent = as before (0 at the start).
     #[serde(default)]
     pub traction_scale: Option<f64>,
+    /// Integrate this stage in time ([`DynamicSpec`]); its `steps` are then the time steps
+    /// (`⌈duration/dt⌉`, not given in the file).
+    #[serde(default)]
+    pub dynamic: Option<DynamicSpec>,
 }
 
 /// Output settings.
@@ -376,6 +391,7 @@ impl Case {
             validate_traction(path, i, t)?;
         }
         self.validate_stages(path)?;
+        self.validate_dynamics(path)?;
         if let Some(c) = &self.contact {
             validate_contact(path, c)?;
         }
@@ -459,7 +475,7 @@ impl Case {
             ));
         }
         for (i, s) in self.stages.iter().enumerate() {
-            if s.steps == 0 || s.steps > 100_000 {
+            if s.dynamic.is_none() && (s.steps == 0 || s.steps > 100_000) {
                 return Err(bad(
                     format!("stages[{i}].steps"),
                     format!("{}", s.steps),

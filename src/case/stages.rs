@@ -54,6 +54,8 @@ pub(super) struct RawStage {
     #[serde(default)]
     traction_scale: Option<f64>,
     #[serde(default)]
+    dynamic: Option<super::DynamicSpec>,
+    #[serde(default)]
     cycles: Option<CycleGroup>,
 }
 
@@ -65,15 +67,23 @@ impl RawStage {
                 "{at}: a cycle group is `{{\"cycles\": {{\"count\": N, \"stages\": [...]}}}}` with nothing beside `cycles`"
             ));
         }
+        let steps = match (&self.dynamic, self.steps) {
+            (Some(_), Some(_)) => {
+                return Err(format!(
+                    "{at}: a dynamic stage takes its steps from `dynamic.duration` and `dynamic.dt`; remove `steps`"
+                ));
+            }
+            (Some(d), None) => d.steps_and_dt().0,
+            (None, s) => s.ok_or_else(|| format!("{at}: missing field `steps`"))?,
+        };
         Ok(Stage {
             cycle: None,
             name: self.name.unwrap_or_default(),
-            steps: self
-                .steps
-                .ok_or_else(|| format!("{at}: missing field `steps`"))?,
+            steps,
             pilot_x: self.pilot_x,
             pilot_y: self.pilot_y,
             traction_scale: self.traction_scale,
+            dynamic: self.dynamic,
         })
     }
 
@@ -83,6 +93,7 @@ impl RawStage {
             && self.pilot_x.is_none()
             && self.pilot_y.is_none()
             && self.traction_scale.is_none()
+            && self.dynamic.is_none()
     }
 }
 

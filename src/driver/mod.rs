@@ -8,15 +8,18 @@
 //! | this file | how a run is driven: [`simulate`], [`simulate_with`] and their options |
 //! | `stage` | the stepping of a stage: attempts, cutbacks, probes, the records of the steps |
 //! | `outcome` | what the driver hands its caller: each step ([`StepEvent`]), the run ([`Simulation`]) |
+//! | `dynamic` | stages integrated in time, and the event after a lost equilibrium |
 //! | `checkpoint` | what a run keeps between steps to go on exactly ([`Checkpoint`]) |
 //! | `refuse` | loads that no equilibrium can carry, refused before the first step or per step |
 
 mod checkpoint;
+mod dynamic;
 mod outcome;
 mod refuse;
 mod stage;
 
 pub use checkpoint::Checkpoint;
+pub use dynamic::{EventEnd, EventSummary};
 pub use outcome::{Simulation, StepEvent};
 pub use refuse::{DISPLACEMENT_ERROR, beyond_friction_at_start, free_direction, refuse_unloadable};
 pub use stage::{MAX_CUTBACKS, STEP_BUDGET, STEP_BUDGET_MIN, step_budget};
@@ -93,7 +96,14 @@ pub fn simulate_with(
     let mut resume = restart.from.map(|c| d.restore(c));
     let first = resume.as_ref().map_or(0, |r| r.0);
     for (si, stage) in case.stages.iter().enumerate().skip(first) {
-        if !d.run_stage(si, stage, on_step, resume.take().map(|r| r.1))? {
+        let go_on = match &stage.dynamic {
+            Some(spec) => d.run_dynamic_stage(si, spec, on_step)?,
+            None => {
+                d.motion = None;
+                d.run_stage(si, stage, on_step, resume.take().map(|r| r.1))?
+            }
+        };
+        if !go_on {
             break;
         }
     }

@@ -49,4 +49,6 @@ pub struct Simulation {
     pub last_u: Option<Vec<f64>>,
     pub last_state: Option<State>,
     pub last_scale: f64,
+    /// The stages integrated in time.
+    pub events: Vec<super::dynamic::EventSummary>,
 }

@@ -55,27 +55,34 @@ enum Attempt {
 
 /// The state of a run between steps.
 pub(super) struct Driver<'a> {
-    model: &'a Model,
-    case: &'a Case,
-    law: Option<FrictionLaw>,
-    quiet: bool,
-    copt: Option<solver::Options>,
-    cstate: Option<State>,
-    lu_cache: solver::LuCache,
-    control: [Control; 2],
-    pilot: PilotState,
-    scale: f64,
-    records: Vec<StepRecord>,
-    t_solve: f64,
-    t_contact: f64,
-    newton_total: usize,
-    failure: Option<StepFailure>,
+    pub(super) model: &'a Model,
+    pub(super) case: &'a Case,
+    pub(super) law: Option<FrictionLaw>,
+    pub(super) quiet: bool,
+    pub(super) copt: Option<solver::Options>,
+    pub(super) cstate: Option<State>,
+    pub(super) lu_cache: solver::LuCache,
+    pub(super) control: [Control; 2],
+    pub(super) pilot: PilotState,
+    pub(super) scale: f64,
+    pub(super) records: Vec<StepRecord>,
+    pub(super) t_solve: f64,
+    pub(super) t_contact: f64,
+    pub(super) newton_total: usize,
+    pub(super) failure: Option<StepFailure>,
     /// The last converged tangential force and the first that failed, while cutbacks bisect.
-    bracket: Option<(f64, f64)>,
-    lost_equilibrium: Option<(f64, f64)>,
-    bracket_attempts: usize,
-    last_u: Option<Vec<f64>>,
-    checkpoint_every: Option<usize>,
+    pub(super) bracket: Option<(f64, f64)>,
+    pub(super) lost_equilibrium: Option<(f64, f64)>,
+    pub(super) bracket_attempts: usize,
+    pub(super) last_u: Option<Vec<f64>>,
+    pub(super) checkpoint_every: Option<usize>,
+    /// The time integrator of the last dynamic stage (`K + c M` factorised for its Δt).
+    pub(super) integrator: Option<crate::dynamics::Integrator>,
+    /// The motion a dynamic stage leaves to the next (none after a quasi-static stage).
+    pub(super) motion: Option<crate::dynamics::TimeState>,
+    /// Physical time reached by the dynamic stages so far.
+    pub(super) physical_time: f64,
+    pub(super) events: Vec<super::dynamic::EventSummary>,
 }
 /// A stage being stepped: its fixed figures, where its load stands, and the counters of its
 /// cutbacks and probes.
@@ -185,6 +192,10 @@ impl<'a> Driver<'a> {
             bracket_attempts: 0,
             last_u: None,
             checkpoint_every,
+            integrator: None,
+            motion: None,
+            physical_time: 0.0,
+            events: Vec::new(),
         }
     }
 
@@ -208,6 +219,7 @@ impl<'a> Driver<'a> {
             },
             last_scale: self.scale,
             records: self.records,
+            events: self.events,
         }
     }
 }
@@ -262,6 +274,21 @@ impl Driver<'_> {
                     self.t_solve += t.elapsed().as_secs_f64();
                     if self.cut_back(&mut s, step, e, &aim) {
                         continue;
+                    }
+                    if self.lost_equilibrium.is_some() && self.case.on_lost_equilibrium.is_some() {
+                        // The jump integrated in time under the first load without equilibrium.
+                        self.failure = None;
+                        let end = self.run_event(si, (aim.scale, aim.control), on_step)?;
+                        if end == super::EventEnd::Rest {
+                            // Re-stuck: the stage goes on from the load held.
+                            self.lost_equilibrium = None;
+                            s.alpha = aim.alpha;
+                            s.dalpha = s.nominal;
+                            s.k_next = next_nominal(s.alpha, s.steps);
+                            s.older = None;
+                            (s.attempts, s.probed, s.cutbacks) = (0, false, 0);
+                            continue;
+                        }
                     }
                     return Ok(false);
                 }
@@ -486,7 +513,7 @@ impl Driver<'_> {
     }
 
     /// Nominal steps of the stages before `si`.
-    fn nominal_before(&self, si: usize) -> usize {
+    pub(super) fn nominal_before(&self, si: usize) -> usize {
         self.case.stages[..si].iter().map(|s| s.steps).sum()
     }
 
@@ -610,7 +637,7 @@ impl Driver<'_> {
     }
 
     /// Records why the run stops at `step`; returns `false` (the stage loop's "stop").
-    fn stop(&mut self, step: usize, cause: StepError, cutbacks: Option<usize>) -> bool {
+    pub(super) fn stop(&mut self, step: usize, cause: StepError, cutbacks: Option<usize>) -> bool {
         self.failure = Some(StepFailure {
             step,
             cause,
@@ -648,6 +675,8 @@ impl Driver<'_> {
             contact: figures,
             wall_s: wall,
             cycle: self.case.stages[si].cycle,
+            physical_time: None,
+            kinetic: None,
         });
     }
 }

@@ -194,6 +194,7 @@ impl Model {
             store.map(|s| (s, &bytes[..])),
             &mut timings,
             gap,
+            None,
         )
     }
 
@@ -204,7 +205,21 @@ impl Model {
         timings: &mut Timings,
         gap: Option<f64>,
     ) -> Result<Model, ModelError> {
-        Self::build_on(case, mesh, None, timings, gap)
+        Self::build_on(case, mesh, None, timings, gap, None)
+    }
+
+    /// The model of an implicit time step on an already read mesh: its factorised matrix is
+    /// `K + c M` ([`crate::assembly::assemble_shifted`]), with `shift[b] = c ρ_b` for each
+    /// body `b` of the case, and its prescribed-value forces those of `K + c M`. Everything
+    /// else (DOFs, contact pair, loads) is that of [`Model::from_mesh`]. Built without the
+    /// model cache.
+    pub fn shifted(
+        case: &Case,
+        mesh: Mesh,
+        shift: &[f64],
+        timings: &mut Timings,
+    ) -> Result<Model, ModelError> {
+        Self::build_on(case, mesh, None, timings, None, Some(shift))
     }
 
     /// [`Model::from_mesh`] with the model cache and the bytes of the mesh file, if any: the
@@ -217,6 +232,7 @@ impl Model {
         cache: Option<(&crate::cache::Store, &[u8])>,
         timings: &mut Timings,
         gap: Option<f64>,
+        shift: Option<&[f64]>,
     ) -> Result<Model, ModelError> {
         // faer's dense kernels (the contact Newton's block factorisations, solves and products)
         // run sequentially: in parallel, some split their sums by the number of threads, and a
@@ -227,6 +243,8 @@ impl Model {
         faer::set_global_parallelism(faer::Par::Seq);
         let mut parts = bodies::prepare(case, &mesh, gap)?;
         timings.pair = parts.t_pair;
+        let shift: Option<Vec<f64>> =
+            shift.map(|s| parts.elem_body.iter().map(|&b| s[b]).collect());
 
         // The model cache: the linear algebra of an earlier build of the same model, if any.
         let (sizes, lookup) = look_up(case, cache, &parts, timings);
@@ -238,7 +256,7 @@ impl Model {
                     (cached::Lookup::Miss(p), Some((store, _))) => Some((store, p)),
                     _ => None,
                 };
-                assembled(&mesh, &mut parts, miss, timings)?
+                assembled(&mesh, &mut parts, shift.as_deref(), miss, timings)?
             }
         };
         crate::trace::mark("factorised");
@@ -458,6 +476,7 @@ fn restored(r: cached::Restored, parts: &mut Prepared, timings: &mut Timings) ->
 fn assembled(
     mesh: &Mesh,
     parts: &mut Prepared,
+    shift: Option<&[f64]>,
     miss: Option<(&crate::cache::Store, cached::Pending)>,
     timings: &mut Timings,
 ) -> Result<LinearAlgebra, ModelError> {
@@ -479,8 +498,14 @@ fn assembled(
         },
         || {
             let t = Instant::now();
-            let f =
-                assembly::assemble_values(mesh, elems, dofs, (&k.col_ptr, &k.row_idx), &mut values);
+            let f = assembly::assemble_shifted(
+                mesh,
+                elems,
+                shift,
+                dofs,
+                (&k.col_ptr, &k.row_idx),
+                &mut values,
+            );
             crate::trace::mark("assembled");
             (f, t.elapsed().as_secs_f64())
         },
