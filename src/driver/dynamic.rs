@@ -7,18 +7,23 @@
 //! duration, or with `until: "rest"` once the loads are at their targets and either
 //! * the kinetic energy has stayed below `rest_ratio` times its peak in the stage over the
 //!   last `rest_window` steps (the event is over: the bodies are at rest, re-stuck), or
-//! * every contact node has slid at μ = f_d over the last `rest_window` steps (steady gross
-//!   sliding: no quasi-static state follows under a force above f_d P).
+//! * every contact node has slid at μ = f_d over the last `rest_window` steps (gross sliding).
 //!
-//! A time step whose contact Newton does not converge stops the run with the last converged
-//! state (a time step is not cut back: that would refactorise `K + c M`).
+//! A time step whose contact Newton does not converge is taken again as two steps of half
+//! the size, down to `Δt / 2^MAX_DT_HALVINGS` (each size's `K + c M` factorised once, when
+//! first needed); past that the run stops with the last converged state. Dynamic stages take
+//! no checkpoints: a resumed run goes on from the last quasi-static one.
+//!
+//! Under a force above f_d P gross sliding has no end: the body slides at μ = f_d and
+//! accelerates at `(Q − f_d P) / m`; `rest` then ends the stage once the whole contact has slid
+//! at f_d for the window.
 
 use super::checkpoint::StageStart;
 use super::outcome::StepEvent;
 use super::stage::Driver;
 use crate::case::{Control, DynamicSpec};
-use crate::contact::solver::Status;
-use crate::dynamics::{Integrator, Scheme};
+use crate::contact::solver::{State, Status};
+use crate::dynamics::{Integrator, Scheme, TimeState};
 use crate::error::{RunError, StepError};
 use crate::record::StepRecord;
 use serde::Serialize;
@@ -59,6 +64,27 @@ pub struct EventSummary {
 
 /// The load of a dynamic stage at time `tau` from its start: traction scale and pilot drive.
 type LoadAt<'a> = &'a dyn Fn(f64) -> (f64, [Control; 2]);
+
+/// Halvings of a dynamic stage's time step before a step is given up.
+pub const MAX_DT_HALVINGS: usize = 3;
+
+/// A time step taken: the state it reached, its load, its Newton iterations and the halvings
+/// of the stage's Δt it took.
+struct Sub {
+    time: TimeState,
+    contact: Option<State>,
+    iterations: usize,
+    scale: f64,
+    control: [Control; 2],
+    halvings: usize,
+    wall: f64,
+}
+
+/// Why a time step gave no state: the step itself, or building a halved step's matrix.
+enum Failure {
+    Step(StepError),
+    Run(RunError),
+}
 
 impl Driver<'_> {
     /// The case's dynamic stage `si` (its `dynamic` block `spec`); `false` when the run stops.
@@ -138,7 +164,7 @@ impl Driver<'_> {
                     _ => vec![0.0; model.dofs.n_free()],
                 };
                 let pilot = model.dofs.pilot.map(|_| self.pilot);
-                let integ = self.integrator.as_ref().expect("built above");
+                let integ = &self.integrators[0];
                 integ.at_rest(
                     model,
                     self.physical_time,
@@ -170,21 +196,21 @@ impl Driver<'_> {
         let ramp = if after_lost { 0.0 } else { spec.ramp_time() };
         let f_d = self.law.as_ref().and_then(|l| l.f_dynamic().ok());
         for k in 1..=n_steps {
-            let t = Instant::now();
             let tau = k as f64 * dt;
-            let (scale, control) = load(tau);
-            let integ = self.integrator.as_mut().expect("built above");
             let step = self.records.len() + 1;
-            let stepped = match integ.step(
-                &now,
-                self.cstate.as_ref(),
-                scale,
-                control,
-                self.law.as_ref(),
-                self.copt.as_ref(),
-            ) {
+            let st = self.cstate.clone();
+            let subs = match self.advance(scheme, 0, &now, st.as_ref(), tau - dt, load) {
                 Ok(s) => s,
-                Err(e) => {
+                Err(Failure::Run(e)) => return Err(e),
+                Err(Failure::Step(e)) => {
+                    if !self.quiet {
+                        eprintln!(
+                            "stage {si}: the time step to t = {:.6e} failed even at Δt/{}: {e}; the run stops at t = {:.6e}, its last converged state",
+                            now.time + dt,
+                            1 << MAX_DT_HALVINGS,
+                            now.time
+                        );
+                    }
                     summary.end = EventEnd::Failed;
                     self.events.push(summary);
                     self.motion = Some(now);
@@ -192,98 +218,101 @@ impl Driver<'_> {
                     return Ok(EventEnd::Failed);
                 }
             };
-            integ.lu.end_step();
-            let finite = stepped.time.u.iter().all(|v| v.is_finite());
-            if !finite {
-                summary.end = EventEnd::Failed;
-                self.events.push(summary);
-                self.motion = Some(now);
-                self.stop(step, StepError::NotFinite, None);
-                return Ok(EventEnd::Failed);
-            }
-            now = stepped.time;
-            self.physical_time = now.time;
-            self.scale = scale;
-            self.control = control;
-            if let Some(p) = now.pilot {
-                self.pilot = p;
-            }
-            if stepped.contact.is_some() {
-                self.cstate = stepped.contact;
-            }
-            self.last_u = Some(now.u.clone());
-            self.newton_total += stepped.iterations;
-            summary.newton_iterations += stepped.iterations;
-            summary.peak_kinetic = summary.peak_kinetic.max(now.kinetic);
-            summary.steps = k;
-            summary.t_end = now.time;
-            // The end criteria, once the loads are at their targets.
-            recent_ke.push_back(now.kinetic);
-            if recent_ke.len() > window {
-                recent_ke.pop_front();
-            }
-            let all_sliding = match (&self.cstate, &self.law, f_d) {
-                (Some(st), Some(law), Some(fd)) => {
-                    let on: Vec<usize> = (0..st.status.len())
-                        .filter(|&j| st.status[j] != Status::Open)
-                        .collect();
-                    !on.is_empty()
-                        && on.iter().all(|&j| {
-                            st.status[j] == Status::Slip
-                                && law.mu(st.slip_mu[j]) <= fd + 1e-9 * fd.abs().max(1e-300)
-                        })
+            let n_subs = subs.len();
+            for (i, sub) in subs.into_iter().enumerate() {
+                let nominal_end = i + 1 == n_subs;
+                now = sub.time;
+                self.physical_time = now.time;
+                self.scale = sub.scale;
+                self.control = sub.control;
+                if let Some(p) = now.pilot {
+                    self.pilot = p;
                 }
-                _ => false,
-            };
-            sliding_run = if all_sliding { sliding_run + 1 } else { 0 };
-            let loaded = tau >= ramp;
-            let mut end = None;
-            if spec.until == crate::case::Until::Rest && loaded && recent_ke.len() == window {
-                let top = recent_ke.iter().cloned().fold(0.0, f64::max);
-                if summary.peak_kinetic > 0.0 && top <= spec.rest_ratio * summary.peak_kinetic {
-                    end = Some(EventEnd::Rest);
-                } else if sliding_run >= window {
-                    end = Some(EventEnd::Sliding);
+                if sub.contact.is_some() {
+                    self.cstate = sub.contact;
+                }
+                self.last_u = Some(now.u.clone());
+                self.newton_total += sub.iterations;
+                summary.newton_iterations += sub.iterations;
+                summary.peak_kinetic = summary.peak_kinetic.max(now.kinetic);
+                summary.t_end = now.time;
+                let mut end = None;
+                if nominal_end {
+                    summary.steps = k;
+                    // The end criteria, once the loads are at their targets.
+                    recent_ke.push_back(now.kinetic);
+                    if recent_ke.len() > window {
+                        recent_ke.pop_front();
+                    }
+                    sliding_run = if self.all_sliding(f_d) {
+                        sliding_run + 1
+                    } else {
+                        0
+                    };
+                    if spec.until == crate::case::Until::Rest
+                        && tau >= ramp
+                        && recent_ke.len() == window
+                    {
+                        let top = recent_ke.iter().cloned().fold(0.0, f64::max);
+                        if summary.peak_kinetic > 0.0
+                            && top <= spec.rest_ratio * summary.peak_kinetic
+                        {
+                            end = Some(EventEnd::Rest);
+                        } else if sliding_run >= window {
+                            end = Some(EventEnd::Sliding);
+                        }
+                    }
+                    if k == n_steps && end.is_none() {
+                        end = Some(EventEnd::Duration);
+                    }
+                }
+                self.t_solve += sub.wall;
+                let step = self.records.len() + 1;
+                let figures = self
+                    .cstate
+                    .as_ref()
+                    .map(|st| model.contact_figures(st, self.law.as_ref()));
+                let pseudo = si as f64 + (now.time - summary.t_start) / (n_steps as f64 * dt);
+                self.records.push(StepRecord {
+                    step,
+                    stage: si,
+                    time: pseudo,
+                    traction_scale: sub.scale,
+                    pilot: model.dofs.pilot.is_some().then_some(self.pilot),
+                    iterations: sub.iterations,
+                    cutbacks: sub.halvings,
+                    contact: figures,
+                    wall_s: sub.wall,
+                    cycle: self.case.stages[si].cycle,
+                    physical_time: Some(now.time),
+                    kinetic: Some(now.kinetic),
+                });
+                let last = last_stage && end.is_some() && !after_lost;
+                // The nominal index of a step of the event after a lost equilibrium is its
+                // own count (the stage's nominal loads are the quasi-static ones).
+                let nominal = nominal_end.then(|| {
+                    if after_lost {
+                        k
+                    } else {
+                        self.nominal_before(si) + k
+                    }
+                });
+                on_step(&StepEvent {
+                    step,
+                    time: pseudo,
+                    scale: sub.scale,
+                    last,
+                    nominal,
+                    u: Some(&now.u),
+                    contact: self.cstate.as_ref(),
+                    record: self.records.last().expect("pushed above"),
+                    checkpoint: None,
+                })?;
+                if let Some(e) = end {
+                    summary.end = e;
                 }
             }
-            if k == n_steps && end.is_none() {
-                end = Some(EventEnd::Duration);
-            }
-            let wall = t.elapsed().as_secs_f64();
-            self.t_solve += wall;
-            let figures = self
-                .cstate
-                .as_ref()
-                .map(|st| model.contact_figures(st, self.law.as_ref()));
-            let pseudo = si as f64 + tau / (n_steps as f64 * dt);
-            self.records.push(StepRecord {
-                step,
-                stage: si,
-                time: pseudo,
-                traction_scale: scale,
-                pilot: model.dofs.pilot.is_some().then_some(self.pilot),
-                iterations: stepped.iterations,
-                cutbacks: 0,
-                contact: figures,
-                wall_s: wall,
-                cycle: self.case.stages[si].cycle,
-                physical_time: Some(now.time),
-                kinetic: Some(now.kinetic),
-            });
-            let last = last_stage && end.is_some() && !after_lost;
-            on_step(&StepEvent {
-                step,
-                time: pseudo,
-                scale,
-                last,
-                nominal: Some(self.nominal_before(si) + k.min(self.case.stages[si].steps)),
-                u: Some(&now.u),
-                contact: self.cstate.as_ref(),
-                record: self.records.last().expect("pushed above"),
-                checkpoint: None,
-            })?;
-            if let Some(e) = end {
-                summary.end = e;
+            if summary.end != EventEnd::Duration || k == n_steps {
                 break;
             }
         }
@@ -299,7 +328,7 @@ impl Driver<'_> {
                 match end {
                     EventEnd::Duration => "duration reached",
                     EventEnd::Rest => "at rest",
-                    EventEnd::Sliding => "steady gross sliding",
+                    EventEnd::Sliding => "gross sliding at f_d",
                     EventEnd::Failed => "failed",
                 }
             );
@@ -309,29 +338,114 @@ impl Driver<'_> {
         Ok(end)
     }
 
-    /// The integrator of time step `dt` and `scheme`, built (and `K + c M` factorised) unless
-    /// the one in hand has both; returns the seconds spent building it.
+    /// The integrators of time step `dt` and `scheme` (and of its halvings), kept unless the
+    /// ones in hand have both; returns the seconds spent building the first (`K + c M`
+    /// factorised).
     fn integrator_for(&mut self, scheme: Scheme, dt: f64) -> Result<f64, RunError> {
         if self
-            .integrator
-            .as_ref()
+            .integrators
+            .first()
             .is_some_and(|i| i.scheme == scheme && i.dt == dt)
         {
             return Ok(0.0);
         }
         let t = Instant::now();
-        self.integrator = None;
+        self.integrators.clear();
+        let integ = self.build_integrator(scheme, dt)?;
+        self.warn_of_coarse_step(&integ);
+        self.integrators.push(integ);
+        Ok(t.elapsed().as_secs_f64())
+    }
+
+    fn build_integrator(&self, scheme: Scheme, dt: f64) -> Result<Integrator, RunError> {
         let density: Vec<f64> = self
             .case
             .bodies
             .iter()
             .map(|b| b.density.expect("checked with the case"))
             .collect();
-        let integ = Integrator::new(self.case, self.model, &density, scheme, dt)
-            .map_err(RunError::Model)?;
-        self.warn_of_coarse_step(&integ);
-        self.integrator = Some(integ);
-        Ok(t.elapsed().as_secs_f64())
+        Integrator::new(self.case, self.model, &density, scheme, dt).map_err(RunError::Model)
+    }
+
+    /// One time step of the integrator at `level` (Δt / 2^level) from `now` (contact state
+    /// `st`) at `τ0` from the stage's start; where its contact Newton does not converge, two
+    /// steps of half the size, down to [`MAX_DT_HALVINGS`] halvings (each size's `K + c M`
+    /// factorised once, when first needed). Returns the steps taken.
+    fn advance(
+        &mut self,
+        scheme: Scheme,
+        level: usize,
+        now: &TimeState,
+        st: Option<&State>,
+        tau0: f64,
+        load: LoadAt,
+    ) -> Result<Vec<Sub>, Failure> {
+        let t = Instant::now();
+        while self.integrators.len() <= level {
+            let dt = self.integrators[0].dt / (1u64 << self.integrators.len()) as f64;
+            let integ = self.build_integrator(scheme, dt).map_err(Failure::Run)?;
+            self.integrators.push(integ);
+        }
+        let (law, copt) = (self.law.clone(), self.copt.clone());
+        let integ = &mut self.integrators[level];
+        let h = integ.dt;
+        let (scale, control) = load(tau0 + h);
+        let tried = integ.step(now, st, scale, control, law.as_ref(), copt.as_ref());
+        let error = match tried {
+            Ok(s) if s.time.u.iter().all(|v| v.is_finite()) => {
+                integ.lu.end_step();
+                return Ok(vec![Sub {
+                    time: s.time,
+                    contact: s.contact,
+                    iterations: s.iterations,
+                    scale,
+                    control,
+                    halvings: level,
+                    wall: t.elapsed().as_secs_f64(),
+                }]);
+            }
+            Ok(_) => StepError::NotFinite,
+            Err(e) => e,
+        };
+        if level >= MAX_DT_HALVINGS {
+            return Err(Failure::Step(error));
+        }
+        if !self.quiet {
+            eprintln!(
+                "the time step to t = {:.6e} (Δt = {h:.3e}): {error}; two steps of Δt/2",
+                now.time + h
+            );
+        }
+        let mut first = self.advance(scheme, level + 1, now, st, tau0, load)?;
+        let mid = first.last().expect("at least one step");
+        let (mid_time, mid_contact) = (mid.time.clone(), mid.contact.clone());
+        let second = self.advance(
+            scheme,
+            level + 1,
+            &mid_time,
+            mid_contact.as_ref(),
+            tau0 + 0.5 * h,
+            load,
+        )?;
+        first.extend(second);
+        Ok(first)
+    }
+
+    /// Whether every contact node slides at μ = f_d.
+    fn all_sliding(&self, f_d: Option<f64>) -> bool {
+        match (&self.cstate, &self.law, f_d) {
+            (Some(st), Some(law), Some(fd)) => {
+                let mut on = (0..st.status.len())
+                    .filter(|&j| st.status[j] != Status::Open)
+                    .peekable();
+                on.peek().is_some()
+                    && on.all(|j| {
+                        st.status[j] == Status::Slip
+                            && law.mu(st.slip_mu[j]) <= fd + 1e-9 * fd.abs().max(1e-300)
+                    })
+            }
+            _ => false,
+        }
     }
 
     /// Warns when a shear wave crosses more than one contact element per step: fronts, which

@@ -76,8 +76,9 @@ pub(super) struct Driver<'a> {
     pub(super) bracket_attempts: usize,
     pub(super) last_u: Option<Vec<f64>>,
     pub(super) checkpoint_every: Option<usize>,
-    /// The time integrator of the last dynamic stage (`K + c M` factorised for its Δt).
-    pub(super) integrator: Option<crate::dynamics::Integrator>,
+    /// The time integrators of the last dynamic stage (`K + c M` factorised for its Δt, then
+    /// for each halving of it that a step needed).
+    pub(super) integrators: Vec<crate::dynamics::Integrator>,
     /// The motion a dynamic stage leaves to the next (none after a quasi-static stage).
     pub(super) motion: Option<crate::dynamics::TimeState>,
     /// Physical time reached by the dynamic stages so far.
@@ -192,7 +193,7 @@ impl<'a> Driver<'a> {
             bracket_attempts: 0,
             last_u: None,
             checkpoint_every,
-            integrator: None,
+            integrators: Vec::new(),
             motion: None,
             physical_time: 0.0,
             events: Vec::new(),
