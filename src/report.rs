@@ -238,6 +238,7 @@ pub fn output_bytes(dir: &Path, stem: &str) -> u64 {
         n == crate::output::JOURNAL
             || n.starts_with(&format!("{stem}_")) && n.ends_with(".vtu")
             || n == format!("{stem}.pvd")
+            || n == format!("{stem}_time.pvd")
             || n.starts_with("contact_") && n.ends_with(".csv")
             || n.starts_with("state_") && n.ends_with(".json")
             || n == "history.csv"

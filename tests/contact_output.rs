@@ -31,6 +31,7 @@ fn contact_csv_and_vtu_hold_the_same_nodes() {
             "mu",
             "q_over_p",
             "slip_mu",
+            "slip_rate",
         ] {
             csv.col(col);
         }

@@ -260,6 +260,7 @@ fn vtu_values_are_the_runs_and_compressed_files_hold_the_same_arrays() {
             "mu",
             "q_over_p",
             "slip_mu",
+            "slip_rate",
         ] {
             let (vals, k) = (cv.f64s("PointData", name), csv.col(name));
             let scale = vals.iter().fold(1e-300f64, |m, x| m.max(x.abs()));

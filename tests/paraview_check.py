@@ -41,6 +41,7 @@ CONTACT_POINT = {
     "mu": 1,
     "q_over_p": 1,
     "slip_mu": 1,
+    "slip_rate": 1,
     "traction": 3,
     "normal": 3,
 }
@@ -63,7 +64,11 @@ def find_pvd(arg):
     if os.path.isfile(arg) and arg.endswith(".pvd"):
         return arg
     if os.path.isdir(arg):
-        pvds = sorted(f for f in os.listdir(arg) if f.endswith(".pvd"))
+        # `<stem>_time.pvd` lists a run's steps integrated in time at their physical time;
+        # the run's series is the other one.
+        pvds = sorted(
+            f for f in os.listdir(arg) if f.endswith(".pvd") and not f.endswith("_time.pvd")
+        )
         if len(pvds) == 1:
             return os.path.join(arg, pvds[0])
         if not pvds:

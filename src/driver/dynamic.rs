@@ -77,6 +77,7 @@ struct Sub {
     scale: f64,
     control: [Control; 2],
     halvings: usize,
+    dt: f64,
     wall: f64,
 }
 
@@ -307,6 +308,7 @@ impl Driver<'_> {
                     contact: self.cstate.as_ref(),
                     record: self.records.last().expect("pushed above"),
                     checkpoint: None,
+                    dt: Some(sub.dt),
                 })?;
                 if let Some(e) = end {
                     summary.end = e;
@@ -401,6 +403,7 @@ impl Driver<'_> {
                     scale,
                     control,
                     halvings: level,
+                    dt: h,
                     wall: t.elapsed().as_secs_f64(),
                 }]);
             }

@@ -24,6 +24,8 @@ pub struct StepEvent<'a> {
     pub record: &'a StepRecord,
     /// The driver's state after this step, when it is a checkpoint ([`super::Restart::every`]).
     pub checkpoint: Option<&'a Checkpoint>,
+    /// The time step of a step integrated in time (its physical time is in the record).
+    pub dt: Option<f64>,
 }
 
 /// What [`super::simulate`] returns.

@@ -486,6 +486,7 @@ impl Driver<'_> {
             contact: self.cstate.as_ref(),
             record: self.records.last().expect("pushed above"),
             checkpoint: checkpoint.as_ref(),
+            dt: None,
         })
     }
 

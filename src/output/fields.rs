@@ -5,8 +5,10 @@ use crate::contact::solver::State;
 use crate::model::Model;
 use crate::output::{self, vtu};
 
-/// Per slave node: (p, q, gap, slip, slip increment, status, μ, q/p, the slip μ sees).
-fn contact_fields(model: &Model, st: &State) -> Vec<[f64; 9]> {
+/// Per slave node: (p, q, gap, slip, slip increment, status, μ, q/p, the slip μ sees, slip
+/// rate). The slip rate is the slip increment over the time step `dt` of a step integrated in
+/// time, zero in a quasi-static step (which takes no time).
+fn contact_fields(model: &Model, st: &State, dt: Option<f64>) -> Vec<[f64; 10]> {
     let m = &model.contact.as_ref().expect("contact").pair.mortar;
     (0..m.slave_nodes.len())
         .map(|j| {
@@ -24,12 +26,13 @@ fn contact_fields(model: &Model, st: &State) -> Vec<[f64; 9]> {
                 st.mu[j],
                 ratio,
                 st.slip_mu[j],
+                dt.map_or(0.0, |dt| st.dv[j] / dt),
             ]
         })
         .collect()
 }
 
-const CONTACT_FIELDS: [&str; 9] = [
+const CONTACT_FIELDS: [&str; 10] = [
     "pressure",
     "shear",
     "gap",
@@ -39,11 +42,12 @@ const CONTACT_FIELDS: [&str; 9] = [
     "mu",
     "q_over_p",
     "slip_mu",
+    "slip_rate",
 ];
 
 /// The contact dataset: the slave edges of the candidate zone with the nodal contact fields
-/// (`compress`: zlib-compressed arrays).
-pub fn contact_vtu(model: &Model, st: &State, compress: bool) -> Vec<u8> {
+/// (`compress`: zlib-compressed arrays; `dt`: the time step of a step integrated in time).
+pub fn contact_vtu(model: &Model, st: &State, dt: Option<f64>, compress: bool) -> Vec<u8> {
     let cm = model.contact.as_ref().expect("contact");
     let m = &cm.pair.mortar;
     let mut index = std::collections::HashMap::new();
@@ -64,7 +68,7 @@ pub fn contact_vtu(model: &Model, st: &State, compress: bool) -> Vec<u8> {
         .iter()
         .map(|e| e.iter().map(|n| index[n]).collect())
         .collect();
-    let fields = contact_fields(model, st);
+    let fields = contact_fields(model, st, dt);
     let slot: std::collections::HashMap<usize, usize> = m
         .slave_nodes
         .iter()
@@ -107,10 +111,10 @@ pub fn contact_vtu(model: &Model, st: &State, compress: bool) -> Vec<u8> {
     vtu::unstructured(&topology, &data, &[], compress).to_vec()
 }
 
-/// The per-step CSV along the slave face.
-pub fn contact_csv(model: &Model, st: &State) -> String {
+/// The per-step CSV along the slave face (`dt`: the time step of a step integrated in time).
+pub fn contact_csv(model: &Model, st: &State, dt: Option<f64>) -> String {
     let m = &model.contact.as_ref().expect("contact").pair.mortar;
-    let fields = contact_fields(model, st);
+    let fields = contact_fields(model, st, dt);
     let rows: Vec<Vec<f64>> = m
         .slave_nodes
         .iter()

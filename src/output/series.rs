@@ -48,10 +48,11 @@ pub fn write_contact_csv(
     dir: &Path,
     step: usize,
     st: &State,
+    dt: Option<f64>,
 ) -> Result<(), RunError> {
     write_file(
         &dir.join(contact_csv_name(step)),
-        contact_csv(model, st).as_bytes(),
+        contact_csv(model, st, dt).as_bytes(),
     )
 }
 
@@ -76,6 +77,9 @@ pub struct StepOutput {
     /// Where to send the step's displacement field once recovered (the driver's checks of the
     /// last step use it rather than solving again).
     pub reply: Option<SyncSender<Vec<f64>>>,
+    /// A step integrated in time: its physical time and time step (the `.pvd` of physical
+    /// time lists it, and its contact fields carry the slip rate).
+    pub physical: Option<(f64, f64)>,
 }
 
 /// What writing a step's bodies dataset needs, shared by the writer thread and the driver's
@@ -269,6 +273,9 @@ impl Bodies<'_> {
 pub struct Series<'a> {
     pub(super) bodies: Bodies<'a>,
     entries: Vec<PvdEntry>,
+    /// The steps integrated in time at their physical time (`<stem>_time.pvd`, written once a
+    /// run has such steps: ParaView animates the event in physical time from it).
+    time_entries: Vec<PvdEntry>,
     /// The files of an earlier run that this one replaces are closed here.
     reaper: super::atomic::Reaper,
     /// Seconds spent writing so far.
@@ -288,6 +295,7 @@ impl<'a> Series<'a> {
                 mesh: Arc::default(),
             },
             entries: Vec::new(),
+            time_entries: Vec::new(),
             reaper: super::atomic::Reaper::new(),
             seconds: 0.0,
             contact_csv: true,
@@ -370,7 +378,8 @@ impl<'a> Series<'a> {
         let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
         if let Some(st) = &s.contact {
             let cname = contact_file_name(stem, step);
-            files.push((dir.join(&cname), contact_vtu(model, st, compress)));
+            let dt = s.physical.map(|p| p.1);
+            files.push((dir.join(&cname), contact_vtu(model, st, dt, compress)));
             self.entries.push(PvdEntry {
                 time: s.time,
                 part: 1,
@@ -379,7 +388,7 @@ impl<'a> Series<'a> {
             if self.contact_csv {
                 files.push((
                     dir.join(contact_csv_name(step)),
-                    contact_csv(model, st).into_bytes(),
+                    contact_csv(model, st, dt).into_bytes(),
                 ));
             }
         }
@@ -387,6 +396,22 @@ impl<'a> Series<'a> {
             dir.join(format!("{stem}.pvd")),
             pvd(&self.entries).into_bytes(),
         ));
+        if let Some((t, _)) = s.physical {
+            let n = self.entries.len() - if s.contact.is_some() { 2 } else { 1 };
+            let this_step: Vec<PvdEntry> = self.entries[n..]
+                .iter()
+                .map(|e| PvdEntry {
+                    time: t,
+                    part: e.part,
+                    file: e.file.clone(),
+                })
+                .collect();
+            self.time_entries.extend(this_step);
+            files.push((
+                dir.join(format!("{stem}_time.pvd")),
+                pvd(&self.time_entries).into_bytes(),
+            ));
+        }
         // The state to resume from, after the step's files.
         if let Some(saved) = s.state {
             files.push((dir.join(state_file_name(step)), saved.bytes()));

@@ -61,7 +61,13 @@ impl StepSink<'_> {
                 && case.output.contact_csv
                 && let Some(st) = ev.contact
             {
-                crate::output::series::write_contact_csv(self.model, self.out_dir, ev.step, st)?;
+                crate::output::series::write_contact_csv(
+                    self.model,
+                    self.out_dir,
+                    ev.step,
+                    st,
+                    ev.dt,
+                )?;
             }
             return Ok(());
         }
@@ -84,6 +90,7 @@ impl StepSink<'_> {
             scale: ev.scale,
             u: ev.u.cloned(),
             contact: ev.contact.cloned(),
+            physical: ev.record.physical_time.zip(ev.dt),
             // The state to resume from, written after the step's files.
             state: ev.checkpoint.map(|c| -> Box<dyn StateFile> {
                 Box::new(SavedRun {
