@@ -45,6 +45,7 @@ fn options(method: Method) -> Options {
         history: Default::default(),
         normal_first: true,
         hertz_start: true,
+        settle_round_off: false,
     }
 }
 

@@ -692,6 +692,7 @@ fn fig2_on_l1() -> (stickslip::model::Model, stickslip::contact::solver::Options
         history: Default::default(),
         normal_first: true,
         hertz_start: true,
+        settle_round_off: false,
     };
     (model, opt)
 }

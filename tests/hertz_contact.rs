@@ -46,6 +46,7 @@ fn solve_model(model: &Model, load: f64, method: Method, kappa: f64) -> Solution
         history: Default::default(),
         normal_first: true,
         hertz_start: true,
+        settle_round_off: false,
     };
     let prev = cm.system.initial_state();
     let out = model

@@ -88,6 +88,7 @@ pub fn simulate_with(
             .map_or_else(Default::default, |f| f.history),
         normal_first: true,
         hertz_start: true,
+        settle_round_off: false,
     });
     let mut d = Driver::new(model, case, law, log < LogLevel::Warn, copt, restart.every);
     if restart.from.is_none() {

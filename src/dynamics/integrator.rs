@@ -59,6 +59,8 @@ impl Integrator {
         if let (Some(cm), Some(b)) = (model.contact.as_mut(), base.contact.as_ref()) {
             cm.system.floating_pilot = b.system.floating_pilot;
         }
+        // The elastic forces `k(u_n)` of every step read each element's geometry from memory.
+        model.keep_force_geometry();
         let masses = Masses::new(&model, density);
         Ok(Integrator {
             model,
@@ -161,13 +163,14 @@ impl Integrator {
         if af != 0.0 {
             let w = af / (1.0 - af);
             let mut k_u = vec![0.0; n];
-            for ((e, _), ef) in m.elems.iter().zip(m.element_forces(&now.u)) {
-                crate::assembly::add_element_vector(
-                    &m.dofs,
-                    &m.mesh.triangles[*e].nodes,
-                    &ef.fe,
-                    &mut k_u,
-                );
+            let table = m.element_dof_table();
+            for (row, fe) in table.iter().zip(m.map_element_forces(&now.u, |f| f.fe)) {
+                for k in 0..12 {
+                    let d = row[k] as usize;
+                    if d < n {
+                        k_u[d] += fe[k];
+                    }
+                }
             }
             for d in 0..n {
                 f[d] += w * (now.scale * m.f_traction[d] - k_u[d]);

@@ -312,7 +312,11 @@ impl ContactSystem {
                 // With the sets unchanged the last linear solve is the answer when the equations
                 // are linear in the sets (constant μ); a slip-dependent μ also needs a small update.
                 let linear = law.is_none_or(|l| matches!(l, FrictionLaw::Constant { .. }));
-                if solved && changes == 0 && (linear || last_update <= opt.tolerance) {
+                let settled = opt.settle_round_off
+                    && solved
+                    && changes <= 2
+                    && last_update <= super::system::SETTLED_UPDATE;
+                if solved && (changes == 0 || settled) && (linear || last_update <= opt.tolerance) {
                     if opt.method != Method::AugmentedLagrangian
                         || self.penetration(&y, &status) <= opt.tolerance
                     {

@@ -255,7 +255,15 @@ pub struct Options {
     /// the pilot's normal force (see `newton::hertz_set`); off, from the closest nodes, as
     /// before (kept for the comparison in `tests/friction_contact.rs`).
     pub hertz_start: bool,
+    /// Accept an iterate whose force update is at round-off ([`SETTLED_UPDATE`]) while at most
+    /// two nodes still flip their set: such a node sits on the friction limit, where either set
+    /// gives the same forces to round-off. Off, such a step fails and the driver cuts it back.
+    pub settle_round_off: bool,
 }
+
+/// The relative force update below which [`Options::settle_round_off`] accepts an iterate
+/// whose sets still flip.
+pub const SETTLED_UPDATE: f64 = 1e-12;
 
 /// Result of one step solve.
 #[derive(Clone, Debug)]
