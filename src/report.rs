@@ -336,8 +336,10 @@ pub fn friction_summary(
     })
 }
 
-/// `history.csv`: one row per converged step (integer columns printed as integers).
+/// `history.csv`: one row per converged step (integer columns printed as integers; a value
+/// that does not apply, such as K_II without a front, as `NaN`).
 pub fn history_csv(records: &[StepRecord]) -> String {
+    let na = |v: Option<f64>| v.unwrap_or(f64::NAN);
     let rows: Vec<Vec<f64>> = records
         .iter()
         .map(|r| {
@@ -366,6 +368,13 @@ pub fn history_csv(records: &[StepRecord]) -> String {
                 r.wall_s,
                 c.mean_slip,
                 r.cycle.unwrap_or(0) as f64,
+                na(c.c_left),
+                na(c.c_right),
+                na(c.b_left),
+                na(c.b_right),
+                na(c.k2_left),
+                na(c.k2_right),
+                na(c.k2_paper),
             ]
         })
         .collect();
@@ -393,6 +402,13 @@ pub fn history_csv(records: &[StepRecord]) -> String {
             "wall_s",
             "mean_slip",
             "cycle",
+            "c_left",
+            "c_right",
+            "b_left",
+            "b_right",
+            "k2_left",
+            "k2_right",
+            "k2_paper",
         ],
         &rows,
         &[
