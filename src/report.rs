@@ -340,10 +340,12 @@ pub fn friction_summary(
     })
 }
 
-/// `history.csv`: one row per converged step (integer columns printed as integers). `t` is
-/// the physical time (advanced by the steps integrated in time only) and `kinetic` the kinetic
-/// energy (zero in quasi-static steps).
+/// `history.csv`: one row per converged step (integer columns printed as integers; a value
+/// that does not apply, such as K_II without a front, as `NaN`). `t` is the physical time
+/// (advanced by the steps integrated in time only) and `kinetic` the kinetic energy (zero in
+/// quasi-static steps).
 pub fn history_csv(records: &[StepRecord]) -> String {
+    let na = |v: Option<f64>| v.unwrap_or(f64::NAN);
     // Quasi-static steps take no physical time and are at rest.
     let mut t = 0.0;
     let rows: Vec<Vec<f64>> = records
@@ -377,6 +379,13 @@ pub fn history_csv(records: &[StepRecord]) -> String {
                 r.cycle.unwrap_or(0) as f64,
                 t,
                 r.kinetic.unwrap_or(0.0),
+                na(c.c_left),
+                na(c.c_right),
+                na(c.b_left),
+                na(c.b_right),
+                na(c.k2_left),
+                na(c.k2_right),
+                na(c.k2_paper),
             ]
         })
         .collect();
@@ -406,6 +415,13 @@ pub fn history_csv(records: &[StepRecord]) -> String {
             "cycle",
             "t",
             "kinetic",
+            "c_left",
+            "c_right",
+            "b_left",
+            "b_right",
+            "k2_left",
+            "k2_right",
+            "k2_paper",
         ],
         &rows,
         &[

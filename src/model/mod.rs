@@ -7,11 +7,15 @@
 //! | `bodies` | what a case gives on its mesh before any matrix: elements, boundaries, contact pair, DOFs, grounding, tractions |
 //! | `cached` | the model's linear algebra in the model cache |
 //! | [`step`] | one load step on the condensed model |
+//! | [`fronts`] | the stick and weakening zones at each end, and K_II at the stick fronts |
+//! | [`profile`] | the initial gap profile: its fitted radius, and whether it is Hertzian |
 //! | `elements` | solution fields read element by element: displacements, nodal stresses |
 
 mod bodies;
 mod cached;
 mod elements;
+pub mod fronts;
+pub mod profile;
 pub mod step;
 
 use crate::assembly::{self, UpperCsc};

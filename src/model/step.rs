@@ -1,11 +1,14 @@
 //! One load step on the condensed model: the solve without contact (the pilot's two
 //! equations on the Schur complement), the contact solve from a committed state, the full
-//! displacement field of a contact state, and the contact figures (a, c, b, forces) of a state.
+//! displacement field of a contact state, and the contact figures of a state (a, c, b, the
+//! fronts at each end and K_II there, forces).
 
+use crate::analytic::hertz::{Geometry, Hertz};
 use crate::case::Control;
 use crate::contact::solver::{self, ContactError, PilotDrive, State, Status};
 use crate::error::StepError;
 use crate::model::Model;
+use crate::model::fronts::{self, Zone};
 use serde::Serialize;
 
 /// The state of the pilot after a step.
@@ -38,6 +41,33 @@ pub struct ContactFigures {
     pub fy: f64,
     /// Mean slip over the contact (the quantity of slip control; see `State::mean_slip`).
     pub mean_slip: f64,
+    /// Ends of the stick zone, `c_left ≤ c_right` (x; each midway between the outermost stick
+    /// node and the next node, so `c = (c_right − c_left)/2`). Absent without a stick node.
+    #[serde(default)]
+    pub c_left: Option<f64>,
+    #[serde(default)]
+    pub c_right: Option<f64>,
+    /// Ends of the zone where μ has not yet weakened to f_d (same rule, `b = (b_right −
+    /// b_left)/2`). Absent without a slip-weakening law or a node in contact.
+    #[serde(default)]
+    pub b_left: Option<f64>,
+    #[serde(default)]
+    pub b_right: Option<f64>,
+    /// Mode-II stress intensity at the left and right ends of the stick zone, measured from
+    /// the shear traction in excess of f_d p (see [`crate::model::fronts`]: the fit, its tips
+    /// and band). Absent where the end does not face a slip zone or its band holds too few
+    /// nodes.
+    #[serde(default)]
+    pub k2_left: Option<f64>,
+    #[serde(default)]
+    pub k2_right: Option<f64>,
+    /// The paper's `K_II = sqrt(2 W E*)` (eqs. KII, KIIa) with `W = (W/p) p`, `p` the Hertz
+    /// pressure `E* sqrt(a² − d²) / 2R` at the mean distance `d` of the two tips from the
+    /// contact centre (`a` from the normal contact force, R fitted to the initial gaps).
+    /// Present with a slip-weakening law (`f_s > f_d`), a Hertzian profile and a measured
+    /// `k2_left` or `k2_right`.
+    #[serde(default)]
+    pub k2_paper: Option<f64>,
 }
 
 /// The load of one step: the traction scale and the pilot's two controls.
@@ -298,37 +328,90 @@ impl Model {
         // The face may run in −x (a slave on the upper body): widths are absolute.
         fig.a = 0.5 * (right - left).abs();
         fig.x_centre = 0.5 * (right + left);
-        let half_width = |pred: &dyn Fn(usize) -> bool| -> f64 {
-            let idx: Vec<usize> = (0..xs.len()).filter(|&j| pred(j)).collect();
-            if idx.is_empty() {
-                return 0.0;
-            }
-            let (a, b) = (idx[0], *idx.last().expect("non-empty"));
-            let l = if a > 0 {
-                0.5 * (xs[a] + xs[a - 1])
-            } else {
-                xs[a]
-            };
-            let r = if b + 1 < xs.len() {
-                0.5 * (xs[b] + xs[b + 1])
-            } else {
-                xs[b]
-            };
-            0.5 * (r - l).abs()
+        let stick = Zone::of(&xs, |j| st.status[j] == Status::Stick);
+        fig.c = stick.map_or(0.0, |z| z.half_width());
+        if let Some(z) = stick {
+            [fig.c_left, fig.c_right] = z.left_right().map(Some);
+        }
+        let Some(law) = law else {
+            return fig;
         };
-        fig.c = half_width(&|j| st.status[j] == Status::Stick);
-        if let Some(law) = law
-            && let Ok(fd) = law.f_dynamic()
-        {
-            let fs = law.f_static();
-            if fs > fd {
-                let tol = 1e-9 * (fs - fd);
-                fig.b = half_width(&|j| {
+        let Ok(fd) = law.f_dynamic() else {
+            return fig;
+        };
+        let fs = law.f_static();
+        let tol = fronts::WEAKENED_TOL * (fs - fd);
+        let weakening = (fs > fd)
+            .then(|| {
+                Zone::of(&xs, |j| {
                     st.status[j] != Status::Open && law.mu(st.slip_mu[j]) > fd + tol
-                });
-            }
+                })
+            })
+            .flatten();
+        fig.b = weakening.map_or(0.0, |z| z.half_width());
+        if let Some(z) = weakening {
+            [fig.b_left, fig.b_right] = z.left_right().map(Some);
+        }
+        // The process zone that places the tips of K_II: the weakening zone, cut where the
+        // slip reaches fronts::process_slip (the whole of it for a ramp or a step).
+        let process = match fronts::process_slip(law) {
+            Some(u_end) if weakening.is_some() => Zone::of(&xs, |j| {
+                st.status[j] != Status::Open
+                    && law.mu(st.slip_mu[j]) > fd + tol
+                    && st.slip_mu[j] < u_end
+            }),
+            _ => weakening,
+        };
+        let Some(stick) = stick else {
+            return fig;
+        };
+        let tau: Vec<f64> = (0..xs.len()).map(|j| -st.f_t[j] / m.weight[j]).collect();
+        let face = fronts::Face {
+            x: &xs,
+            p: &p,
+            tau: &tau,
+            status: &st.status,
+            h: &m.h,
+        };
+        let k2 = fronts::k2_ends(&face, &stick, process.as_ref(), fd);
+        // Left is the end of smaller x (the face may run in −x).
+        let (left, right) = if stick.ends[0] <= stick.ends[1] {
+            (0, 1)
+        } else {
+            (1, 0)
+        };
+        fig.k2_left = k2[left];
+        fig.k2_right = k2[right];
+        if fs > fd && (fig.k2_left.is_some() || fig.k2_right.is_some()) {
+            fig.k2_paper = self.k2_paper(law, &fig, &stick, process.as_ref());
         }
         fig
+    }
+
+    /// The paper's `K_II = sqrt(2 W E*)` for the fronts of a state (see
+    /// [`ContactFigures::k2_paper`]); `None` where the profile is not Hertzian or the law has no
+    /// fracture energy.
+    fn k2_paper(
+        &self,
+        law: &crate::friction::FrictionLaw,
+        fig: &ContactFigures,
+        stick: &Zone,
+        process: Option<&Zone>,
+    ) -> Option<f64> {
+        let cm = self.contact.as_ref()?;
+        let w_over_p = law.w_over_p().ok().filter(|w| *w > 0.0)?;
+        let (radius, _, _, rms) = crate::model::profile::fit_radius(self, None)?;
+        if crate::model::profile::not_hertzian(radius, rms).is_some() {
+            return None;
+        }
+        let n0 = cm.pair.common_normal.unwrap_or([0.0, 1.0]);
+        let load = (fig.fx * n0[0] + fig.fy * n0[1]).abs();
+        let hertz = Hertz::new(Geometry::new(radius, cm.e_star).ok()?, load).ok()?;
+        // The tips of the measured K_II: the midpoints of the process zones.
+        let (tips, _) = fronts::tips(stick, process);
+        let d = 0.5 * ((tips[0] - fig.x_centre).abs() + (tips[1] - fig.x_centre).abs());
+        let p = hertz.pressure(d);
+        Some((2.0 * cm.e_star * w_over_p * p).sqrt())
     }
 }
 
