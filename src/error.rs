@@ -145,13 +145,15 @@ pub enum RunError {
         "the contact reached the edge of the candidate zone (candidate gap {gap:e}) at step {step}"
     )]
     ZoneClipped { gap: f64, step: usize },
-    #[error("{}", lost_message(*q_max, *q_fail, *cutbacks, *local_peak))]
+    #[error("{}", event.as_ref().map_or_else(|| lost_message(*q_max, *q_fail, *cutbacks, *local_peak), |e| event_message(*q_max, *q_fail, e)))]
     EquilibriumLost {
         q_max: f64,
         q_fail: f64,
         cutbacks: usize,
         /// f_d P when Q_max is below it (a local peak, not the loss of equilibrium).
         local_peak: Option<f64>,
+        /// How the jump integrated in time ended (`on_lost_equilibrium`), if it was.
+        event: Option<String>,
     },
 }
 
@@ -262,6 +264,14 @@ impl RunError {
             RunError::EquilibriumLost { .. } => 5,
         }
     }
+}
+
+/// The message of [`RunError::EquilibriumLost`] after the jump was integrated in time.
+fn event_message(q_max: f64, q_fail: f64, event: &str) -> String {
+    format!(
+        "equilibrium lost at Q_max = {q_max:.6} (none at {q_fail:.6}): the jump under that load \
+         was integrated in time and {event}; the output holds the event"
+    )
 }
 
 /// The message of [`RunError::EquilibriumLost`]: gross sliding, or a local peak of the load path

@@ -292,6 +292,7 @@ fn step_output(
         contact: Some(s.3.clone()),
         state: None,
         reply,
+        physical: None,
     }
 }
 

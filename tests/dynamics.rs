@@ -250,3 +250,199 @@ fn with_rho_inf_below_one_the_energy_lost_is_booked_as_the_schemes_dissipation()
     // The lower ρ∞, the more the high frequencies are damped.
     assert!(drops[1] > drops[0], "{drops:?}");
 }
+
+/// Fig. 2's law on VM272 L2 with the density of a polymer (units mm, N, s: ρ in t/mm³); the
+/// tangential stage replaced by `tangential`.
+fn fig2_with(tangential: serde_json::Value) -> serde_json::Value {
+    let mut v = shipped_case_on("fig2.json", "vm272_L2.msh");
+    for b in v["bodies"].as_array_mut().unwrap() {
+        b["density"] = serde_json::json!(1.2e-9);
+    }
+    v["stages"][1] = tangential;
+    v["output"] = serde_json::json!({"vtu": false, "contact_csv": false});
+    v
+}
+
+/// The rows of stage 1 of a run's history: columns `x` and `y`.
+fn stage1(r: &CaseRun, x: &str, y: &str) -> (Vec<f64>, Vec<f64>) {
+    let t = r.history();
+    let (s, cx, cy) = (t.col("stage"), t.col(x), t.col(y));
+    t.rows
+        .iter()
+        .filter(|row| row[s] == 1.0)
+        .map(|row| (row[cx], row[cy]))
+        .unzip()
+}
+
+/// Linear interpolation of `(xs, ys)` (`xs` increasing) at `x`.
+fn interp(xs: &[f64], ys: &[f64], x: f64) -> f64 {
+    let k = xs.partition_point(|v| *v < x).clamp(1, xs.len() - 1);
+    let w = (x - xs[k - 1]) / (xs[k] - xs[k - 1]);
+    ys[k - 1] + w * (ys[k] - ys[k - 1])
+}
+
+/// A tangential force ramped slowly (smoothly over 0.1 s, about 400 periods of the bodies'
+/// lowest mode and 4e4 times a / c_s) in a dynamic stage follows the quasi-static
+/// Q–displacement curve within 0.1 % (measured 7.5e-5 relative to the largest displacement
+/// with ρ∞ = 1 over 0.1 s; inertia's share falls with the ramp time: 1.4e-2 over a linear
+/// ramp of 4e-3 s at another density).
+#[test]
+fn a_slow_force_ramp_in_time_follows_the_quasi_static_curve() {
+    let qs = run_case(
+        "qs-force",
+        &fig2_with(serde_json::json!({"name": "t", "steps": 200, "pilot_x": {"force": 0.8}})),
+        &["--quiet", "--no-cache"],
+    );
+    qs.assert_ok("quasi-static");
+    let dy = run_case(
+        "dyn-force",
+        &fig2_with(serde_json::json!({"name": "t", "pilot_x": {"force": 0.8},
+            "dynamic": {"dt": 5e-4, "duration": 0.1, "rho_inf": 1.0, "ramp_shape": "smooth"}})),
+        &["--quiet", "--no-cache"],
+    );
+    dy.assert_ok("dynamic");
+    let (q_s, u_s) = stage1(&qs, "pilot_fx", "pilot_ux");
+    let (q_d, u_d) = stage1(&dy, "pilot_fx", "pilot_ux");
+    let u_max = u_s.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let worst = q_d
+        .iter()
+        .zip(&u_d)
+        .filter(|(q, _)| **q > q_s[0])
+        .map(|(q, u)| (u - interp(&q_s, &u_s, *q)).abs() / u_max)
+        .fold(0.0, f64::max);
+    eprintln!("force ramp in time: largest displacement difference {worst:.2e} of the largest");
+    assert!(worst < 1e-3, "{worst:.3e}");
+}
+
+/// The peak tangential force Q_max reached in time under slip control (the mean slip ramped
+/// smoothly over 0.08 s, ρ∞ = 0.5) is the quasi-static one within 0.1 % (measured 7.1e-5),
+/// and so is the force along the rising branch from a slip of 1e-4 (measured ≤ 8.4e-4 of
+/// Q_max, against a linear interpolation of the 200 quasi-static steps). Slip control in time needs ρ∞ < 1: the constraint on the mean slip leaves the
+/// mode it drives undamped, and with ρ∞ = 1 the pilot force diverges.
+#[test]
+fn q_max_reached_slowly_in_time_is_the_quasi_static_one() {
+    let qs = run_case(
+        "qs-slip",
+        &fig2_with(serde_json::json!({"name": "t", "steps": 200, "pilot_x": {"slip": 0.003}})),
+        &["--quiet", "--no-cache"],
+    );
+    qs.assert_ok("quasi-static");
+    let dy = run_case(
+        "dyn-slip",
+        &fig2_with(serde_json::json!({"name": "t", "pilot_x": {"slip": 0.003},
+            "dynamic": {"dt": 4e-4, "duration": 0.08, "rho_inf": 0.5, "ramp_shape": "smooth"}})),
+        &["--quiet", "--no-cache"],
+    );
+    dy.assert_ok("dynamic");
+    let (s_s, q_s) = stage1(&qs, "mean_slip", "pilot_fx");
+    let (s_d, q_d) = stage1(&dy, "mean_slip", "pilot_fx");
+    let peak = |q: &[f64]| q.iter().cloned().fold(f64::MIN, f64::max);
+    let (qm_s, qm_d) = (peak(&q_s), peak(&q_d));
+    let k_peak = q_s.iter().position(|q| *q == qm_s).unwrap();
+    let rel = (qm_d / qm_s - 1.0).abs();
+    let worst = s_d
+        .iter()
+        .zip(&q_d)
+        .filter(|(s, _)| **s >= 1e-4 && **s <= s_s[k_peak])
+        .map(|(s, q)| (q - interp(&s_s, &q_s, *s)).abs() / qm_s)
+        .fold(0.0, f64::max);
+    eprintln!(
+        "Q_max quasi-static {qm_s:.6}, in time {qm_d:.6} (relative {rel:.2e}); rising branch within {worst:.2e}"
+    );
+    assert!(rel < 1e-3);
+    assert!(worst < 1e-3, "{worst:.3e}");
+}
+
+#[test]
+fn a_dynamic_stage_without_a_density_names_the_body() {
+    let mut v = fig2_with(serde_json::json!({"name": "t", "pilot_x": {"force": 0.8},
+        "dynamic": {"dt": 1e-3, "duration": 0.01}}));
+    v["bodies"][1].as_object_mut().unwrap().remove("density");
+    let r = run_case("no-density", &v, &["--quiet", "--no-cache"]);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(
+        r.stderr.contains("bodies[1].density")
+            && r.stderr.contains("upper_body")
+            && r.stderr.contains("stages[1]"),
+        "{}",
+        r.stderr
+    );
+    assert!(!r.wrote_output());
+    // The switch on a lost equilibrium needs the densities too.
+    let mut v = shipped_case("fig2_event.json");
+    v["bodies"][0].as_object_mut().unwrap().remove("density");
+    let r = run_case("no-density-event", &v, &["--quiet", "--no-cache"]);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(
+        r.stderr.contains("bodies[0].density") && r.stderr.contains("on_lost_equilibrium"),
+        "{}",
+        r.stderr
+    );
+}
+
+#[test]
+fn bad_time_steps_are_refused_with_the_key() {
+    for (dynamic, key) in [
+        (
+            serde_json::json!({"dt": 0.0, "duration": 0.01}),
+            "stages[1].dynamic.dt",
+        ),
+        (
+            serde_json::json!({"dt": 1e-3, "duration": 1e-4}),
+            "stages[1].dynamic.duration",
+        ),
+        (
+            serde_json::json!({"dt": 1e-9, "duration": 1.0}),
+            "stages[1].dynamic.duration",
+        ),
+        (
+            serde_json::json!({"dt": 1e-3, "duration": 0.01, "rho_inf": 1.5}),
+            "stages[1].dynamic.rho_inf",
+        ),
+        (
+            serde_json::json!({"dt": 1e-3, "duration": 0.01, "ramp": 0.02}),
+            "stages[1].dynamic.ramp",
+        ),
+    ] {
+        let v = fig2_with(
+            serde_json::json!({"name": "t", "pilot_x": {"force": 0.8}, "dynamic": dynamic}),
+        );
+        let r = run_case("bad-dt", &v, &["--quiet", "--no-cache"]);
+        assert_eq!(r.code, 2, "{key}: {}", r.stderr);
+        assert!(r.stderr.contains(key), "{key}: {}", r.stderr);
+        assert!(!r.wrote_output());
+    }
+    // Steps are the time steps of a dynamic stage: given as well, they are refused.
+    let v = fig2_with(
+        serde_json::json!({"name": "t", "steps": 10, "pilot_x": {"force": 0.8},
+        "dynamic": {"dt": 1e-3, "duration": 0.01}}),
+    );
+    let r = run_case("steps-and-dt", &v, &["--quiet", "--no-cache"]);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("remove `steps`"), "{}", r.stderr);
+}
+
+/// A time step through which a shear wave crosses more than one contact element is warned of,
+/// with the numbers and the Δt that resolves it.
+#[test]
+fn a_time_step_too_coarse_for_the_fronts_is_warned_of_with_the_numbers() {
+    let v = fig2_with(serde_json::json!({"name": "t", "pilot_x": {"force": 0.8},
+        "dynamic": {"dt": 1e-6, "duration": 1e-5, "ramp": 0}}));
+    let r = run_case("coarse-dt", &v, &["--no-cache"]);
+    r.assert_ok("coarse Δt");
+    // h ≈ 0.05 mm along the contact on L2, c_s = 2.53e5 mm/s: c_s Δt / h ≈ 5.
+    let line = r
+        .stderr
+        .lines()
+        .find(|l| l.contains("c_s Δt / h"))
+        .unwrap_or_else(|| panic!("no warning: {}", r.stderr));
+    assert!(
+        line.contains("Δt = 1.000e-6") && line.contains("a Δt below"),
+        "{line}"
+    );
+    let fine = fig2_with(serde_json::json!({"name": "t", "pilot_x": {"force": 0.8},
+        "dynamic": {"dt": 1e-7, "duration": 1e-6, "ramp": 0}}));
+    let r = run_case("fine-dt", &fine, &["--no-cache"]);
+    r.assert_ok("fine Δt");
+    assert!(!r.stderr.contains("c_s Δt / h"), "{}", r.stderr);
+}

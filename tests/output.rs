@@ -365,6 +365,7 @@ fn a_failed_step_of_a_batch_leaves_no_file_of_the_steps_after_it() {
         contact: None,
         state: None,
         reply: None,
+        physical: None,
     };
     let mut series = Series::new(&model, &dir, "case", false);
     let err = series.write(vec![step(3), step(4), step(5)]).unwrap_err();

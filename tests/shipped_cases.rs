@@ -181,6 +181,63 @@ fn check_case(name: &str, d: &Done) {
             // Measured −0.11 %.
             assert!(rel(name, "Q_max/(f_d P)", fe, jkr) < 0.003);
         }
+        "fig2_event" => {
+            // Fig. 2's law past Q_max under force control, the jump integrated in time.
+            assert_eq!(d.code, 5, "{name}: {}", d.stderr);
+            let v = s();
+            let f = v["friction"].clone();
+            let q_max = num(&f, "q_max");
+            // The quasi-static peak against the double Cattaneo–Mindlin solution (measured
+            // −0.008 % on L3).
+            let apparent = q_max / num(&f, "load");
+            let dcm = num(&f, "apparent_friction_dcm");
+            assert!(rel(name, "Q_max/P", apparent, dcm) < 0.003);
+            let events = v["events"].as_array().unwrap();
+            assert_eq!(events.len(), 1, "{name}: {events:?}");
+            let e = &events[0];
+            assert_eq!(e["after_lost_equilibrium"], json!(true));
+            // Q_fail > f_d P: once every node has weakened no equilibrium is left, and the
+            // event ends in gross sliding at f_d.
+            assert_eq!(e["end"], json!("sliding"), "{name}: {e}");
+            let t = h();
+            let (tc, fx, ns, cc) = (t.col("t"), t.col("pilot_fx"), t.col("n_stick"), t.col("c"));
+            let event: Vec<&Vec<f64>> = t.rows.iter().filter(|r| r[tc] > 0.0).collect();
+            // The event starts at the quasi-static Q_max: the load it holds is within 0.1 %
+            // of it (the bracket's width, 1e-5, plus the contact solve's tolerance on the
+            // pilot force; measured 5.4e-7).
+            let held = event
+                .iter()
+                .map(|r| (r[fx] / q_max - 1.0).abs())
+                .fold(0.0, f64::max);
+            println!(
+                "{name}: held load within {held:.2e} of Q_max over {} steps",
+                event.len()
+            );
+            assert!(held < 1e-3);
+            // The stick zone ends where the fronts have met: none is left.
+            assert_eq!(event.last().unwrap()[ns], 0.0);
+            // The fronts run inwards: after the first fifth of the event (the bodies' first
+            // oscillations, in which the whole contact sticks and slips again), the stick
+            // zone's half-width never grows.
+            let tail = &event[event.len() / 5..];
+            let grows = tail
+                .windows(2)
+                .filter(|w| w[1][cc].max(0.0) > w[0][cc].max(0.0) + 1e-12)
+                .count();
+            assert_eq!(
+                grows, 0,
+                "{name}: the stick zone grows in the event's last 4/5"
+            );
+            // The energy balance: what the scheme dissipates is a small part of the
+            // friction's dissipation over the event (measured 2e-5).
+            let en = Table::read(&d.out.join("energy.csv"));
+            let (dis, numc) = (en.col("dissipation"), en.col("numerical"));
+            let first = &en.rows[t.rows.len() - event.len() - 1];
+            let last = en.rows.last().unwrap();
+            let ratio = (last[numc] - first[numc]).abs() / (last[dis] - first[dis]);
+            println!("{name}: numerical / frictional dissipation over the event {ratio:.2e}");
+            assert!(ratio < 2e-4);
+        }
         n if n.starts_with("pair_") => {
             assert_eq!(d.code, 5, "{name}: {}", d.stderr);
             let f = s()["friction"].clone();
@@ -292,6 +349,17 @@ fn summary_answers(out: &Path) -> Value {
     ] {
         o.remove(k);
     }
+    for e in o
+        .get_mut("events")
+        .and_then(|e| e.as_array_mut())
+        .into_iter()
+        .flatten()
+    {
+        let e = e.as_object_mut().unwrap();
+        e.remove("wall_s");
+        e.remove("factorise_s");
+    }
+    let o = v.as_object_mut().unwrap();
     for st in o["steps"].as_array_mut().unwrap() {
         st.as_object_mut().unwrap().remove("wall_s");
     }
@@ -311,6 +379,20 @@ fn answers_do_not_depend_on_the_output_settings() {
             ("novtu", Some(json!({"vtu": false}))),
             ("every1", Some(json!({"every": 1}))),
         ] {
+            // Every one of the event's ~1 800 time steps as a `.vtu` is 2 GB of output at L3:
+            // that case's variant writes every 7th step instead (a cadence that is not the
+            // shipped one's either). Its variants keep its energy balance, which its summary
+            // reports.
+            let output = match (name.as_str(), output) {
+                ("fig2_event", Some(o)) if o["every"] == json!(1) => {
+                    Some(json!({"every": 7, "energy": true}))
+                }
+                ("fig2_event", Some(mut o)) => {
+                    o["energy"] = json!(true);
+                    Some(o)
+                }
+                (_, o) => o,
+            };
             let out = dir.join(format!("{name}-{tag}"));
             let d = match output {
                 None => run_bounded(&format!("cases/{name}.json"), &out),

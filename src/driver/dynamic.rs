@@ -62,6 +62,21 @@ pub struct EventSummary {
     pub wall_s: f64,
 }
 
+impl EventSummary {
+    /// How the stage ended, in words.
+    pub fn describe(&self) -> String {
+        let t = self.t_end;
+        match self.end {
+            EventEnd::Duration => format!("reached the end of its duration at t = {t:.6e}"),
+            EventEnd::Rest => format!("came to rest at t = {t:.6e}"),
+            EventEnd::Sliding => format!(
+                "ended in gross sliding at f_d at t = {t:.6e} (every contact node sliding at μ = f_d: under a force above f_d P the body accelerates)"
+            ),
+            EventEnd::Failed => format!("stopped at t = {t:.6e}: a time step failed"),
+        }
+    }
+}
+
 /// The load of a dynamic stage at time `tau` from its start: traction scale and pilot drive.
 type LoadAt<'a> = &'a dyn Fn(f64) -> (f64, [Control; 2]);
 

@@ -296,11 +296,17 @@ pub fn run_model(
     }
     if let Some((q_max, q_fail)) = lost_equilibrium {
         let local_peak = summary.friction.as_ref().and_then(|f| f.local_peak(q_max));
+        let event = summary
+            .events
+            .iter()
+            .rfind(|e| e.after_lost_equilibrium)
+            .map(|e| e.describe());
         return Err(RunError::EquilibriumLost {
             q_max,
             q_fail,
             cutbacks: bracket_attempts,
             local_peak,
+            event,
         });
     }
     if let Some(e) = failure {
