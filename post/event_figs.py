@@ -10,15 +10,18 @@ integrated in time (`"on_lost_equilibrium": {"dynamic": ...}`, e.g. cases/fig2_e
 written with `"output": {"every": 1, "energy": true}` so that every step has its contact table.
 Writes PREFIX.png (default RUNDIR/event.png), one figure of eight panels; the left column spans
 the whole event, the right column zooms on its end (from T0_US µs after the event's start; by
-default from where the kinetic energy first reaches 1e-3 of its largest value):
+default the last 3 (t_end − t_K) of the event, t_K where the kinetic energy first reaches 1e-2
+of its largest value):
 
   (a)  the slip rate |slip_rate| (mm/s, log colour scale, clipped below --vmin) in the (t, x)
        plane, x along the lower body's contact face; grey: open nodes (status 0). Overlaid:
-       the ends of the stick zone c_left(t), c_right(t) (white) and of the zone where μ has
+       the ends of the stick zone c_left(t), c_right(t) (green) and of the zone where μ has
        not weakened to f_d, b_left(t), b_right(t) (cyan), all from history.csv.
   (b)  c_left, c_right, b_left, b_right against t.
   (b') the front speed |dc/dt| / c_s, c_s = sqrt(E / (2 (1 + ν)) / ρ) of the lower body
-       (read from the case file). The raw front positions are quantised to the node spacing h,
+       (read from the case file; c_R and c_p, plane strain, drawn for reference). The b front
+       is where the accumulated slip reaches the weakening distance: not a material front, it
+       can outrun the waves where a whole region slips at once. The raw front positions are quantised to the node spacing h,
        so the raw difference |Δc/Δt| is 0 or h/Δt (grey dots). The smoothed speed is the
        crossing-time estimate: while a front moves monotonically, the speed between two
        successive node crossings is (node spacing) / (time between them), drawn as a
@@ -44,6 +47,7 @@ import json
 import math
 import os
 import sys
+import textwrap
 
 import matplotlib
 
@@ -82,15 +86,19 @@ def event_rows(h, which):
 
 
 def shear_wave_speed(case_path):
-    """c_s (mm/s) of the lower body (the first body; all bodies listed)."""
+    """c_s, c_p (plane strain), c_R (mm/s) of the lower body, and c_s of every body."""
     with open(case_path) as f:
         case = json.load(f)
     speeds = []
     for b in case["bodies"]:
         g = b["E"] / (2.0 * (1.0 + b["nu"]))
         speeds.append((b.get("group", "?"), math.sqrt(g / b["density"])))
-    lower = [s for g, s in speeds if g == "lower_body"]
-    return (lower[0] if lower else speeds[0][1]), speeds
+    lower = [b for b in case["bodies"] if b.get("group") == "lower_body"] or case["bodies"][:1]
+    nu = lower[0]["nu"]
+    cs = math.sqrt(lower[0]["E"] / (2.0 * (1.0 + nu)) / lower[0]["density"])
+    cp = cs * math.sqrt(2.0 * (1.0 - nu) / (1.0 - 2.0 * nu))  # plane strain
+    cr = cs * (0.862 + 1.14 * nu) / (1.0 + nu)  # Rayleigh (Viktorov's approximation)
+    return cs, cp, cr, speeds
 
 
 def flicker_end(pos_left, pos_right, n_stick, k0):
@@ -165,7 +173,8 @@ def main():
     ap.add_argument("--out", help="PNG path prefix (default RUNDIR/event)")
     ap.add_argument("--event", type=int, default=0, help="which event of the run (0: first)")
     ap.add_argument("--zoom", type=float, help="start of the right column's window, µs after "
-                    "the event's start (default: kinetic energy first at 1e-3 of its peak)")
+                    "the event's start (default: the last 3 (t_end - t_K), t_K where the "
+                    "kinetic energy first reaches 1e-2 of its peak)")
     ap.add_argument("--vmin", type=float, default=1e-8, help="lowest slip rate coloured, mm/s")
     ap.add_argument("--dpi", type=int, default=85)
     args = ap.parse_args()
@@ -176,7 +185,7 @@ def main():
     case_path = args.case or summary.get("case")
     if not case_path or not os.path.exists(case_path):
         sys.exit(f"case file {case_path!r} not found: pass --case")
-    c_s, all_cs = shear_wave_speed(case_path)
+    c_s, c_p, c_r, all_cs = shear_wave_speed(case_path)
 
     h = read_csv(os.path.join(rd, "history.csv"))
     i0, rows = event_rows(h, args.event)
@@ -234,8 +243,8 @@ def main():
     if args.zoom is not None:
         tz = args.zoom
     else:
-        kz = np.argmax(kin >= 1e-3 * kin.max())
-        tz = tu[kz]
+        kz = np.argmax(kin >= 1e-2 * kin.max())
+        tz = tu[-1] - 3.0 * (tu[-1] - tu[kz])
     tz = min(tz, tu[-1] * 0.98)
     z = tu >= tz
 
@@ -246,7 +255,8 @@ def main():
     vmax_c = max((s[2] for _, s in allsegs), default=float("nan"))
     ball = [(n, s) for n in ("left", "right") for s in b_segs[n]]
     vmax_b = max((s[2] for _, s in ball), default=float("nan"))
-    print(f"case {case_path}; c_s = {c_s:.4g} mm/s ({c_s / 1e3:.1f} m/s)"
+    print(f"case {case_path}; c_s = {c_s:.4g} mm/s ({c_s / 1e3:.1f} m/s), "
+          f"c_p/c_s = {c_p / c_s:.3f}, c_R/c_s = {c_r / c_s:.3f}"
           + ("" if len(all_cs) < 2 else "; bodies: " + ", ".join(f"{g} {v:.4g}" for g, v in all_cs)))
     print(f"event {args.event}: steps {steps[1]}..{steps[-1]} ({len(steps) - 1}), dt = {dt:.4g} s, "
           f"duration {t[-1]:.4g} s; start = step {steps[0]}; summary end: {ev.get('end')}")
@@ -289,11 +299,10 @@ def main():
     # ---- figure ----
     fig, axs = plt.subplots(4, 2, figsize=(13.5, 15.5), sharex="col",
                             gridspec_kw={"height_ratios": [1.35, 1, 1, 1.1]})
-    title = summary.get("title", "")
+    title = "\n".join(textwrap.wrap(summary.get("title", ""), 120))
     fig.suptitle(
         f"Jump to sliding integrated in time: {os.path.basename(case_path)}, "
-        f"{os.path.basename(summary.get('mesh', ''))}\n"
-        f"{title[:110]}{'…' if len(title) > 110 else ''}\n"
+        f"{os.path.basename(summary.get('mesh', ''))}\n{title}\n"
         f"Δt = {dt:.3g} s, ρ∞ = {ev.get('rho_inf', '?')}, c_s = {c_s / 1e3:.0f} m/s;"
         f" right column: zoom from t = {tz:.1f} µs",
         fontsize=10.5)
@@ -310,7 +319,8 @@ def main():
         im = ax.pcolormesh(T[rsel], Xg[rsel], np.ma.masked_invalid(rate[rsel]), norm=norm,
                            cmap=cmap, shading="nearest", rasterized=True)
         ms = 1.2 if col == 0 else 2.5
-        for arr, colr, lab in ((cl, "w", "stick-zone ends c_left, c_right"), (cr, "w", None),
+        for arr, colr, lab in ((cl, "#39ff14", "stick-zone ends c_left, c_right"),
+                               (cr, "#39ff14", None),
                                (bl, "c", "b_left, b_right (μ > f_d inside)"), (br, "c", None)):
             ax.plot(tu[sel], arr[sel], ".", color=colr, ms=ms, mew=0, label=lab)
         ax.set_ylabel("x along the contact (mm)")
@@ -347,26 +357,28 @@ def main():
             ok = (raw > 0) & np.isfinite(raw) & (np.arange(1, len(t)) >= f_end) & sel[1:]
             ax.plot(tt[ok], raw[ok] / c_s, ".", color="0.6", ms=4, mew=0)
         ax.plot([], [], ".", color="0.6", ms=6, label="raw |Δc/Δt| (one node per step)")
-        for segs, colr, lab, lw in ((c_segs, None, "stick front c", 2.2),
-                                    (b_segs, None, "front b (μ = f_d)", 1.2)):
-            for name, cc in (("left", "C0"), ("right", "C3")):
+        for segs, lab, ls, mk in ((c_segs, "stick front c", "-", "o"),
+                                  (b_segs, "front b (μ = f_d)", "--", "s")):
+            for name, cc, lw, al in (("left", "C0", 4.0, 0.45), ("right", "C3", 1.4, 1.0)):
                 first = True
                 for a, b, v in segs[name]:
-                    ls = "-" if lab.startswith("stick") else "--"
-                    ax.plot([a * US, b * US], [v / c_s] * 2, color=cc, lw=lw, ls=ls,
+                    ax.plot([a * US, b * US], [v / c_s] * 2, color=cc, lw=lw, ls=ls, alpha=al,
                             label=f"{lab}, {name}" if first else None)
-                    ax.plot([0.5 * (a + b) * US], [v / c_s], "o" if ls == "-" else "s",
-                            color=cc, ms=4, mfc="w" if ls == "--" else cc)
+                    ax.plot([0.5 * (a + b) * US], [v / c_s], mk, color=cc, alpha=al,
+                            ms=6 if name == "left" else 3.5, mfc=cc if mk == "o" else "w")
                     first = False
-        ax.axhline(1.0, color="k", lw=0.6, ls="-.")
-        ax.text(tu[sel][0], 1.0, " c_s", va="bottom", fontsize=8)
+        for v, lab, va in ((c_r, "c_R", "top"), (c_s, "c_s", "bottom"), (c_p, "c_p", "bottom")):
+            ax.axhline(v / c_s, color="k", lw=0.6, ls="-." if lab == "c_s" else ":")
+            ax.text(1.0, v / c_s, " " + lab, va=va, ha="left", fontsize=8,
+                    transform=ax.get_yaxis_transform())
         ax.set_yscale("log")
-        ax.set_ylim(3e-4, 3)
+        ax.set_ylim(3e-4, 4)
         ax.set_ylabel("front speed |dc/dt| / c_s")
         ax.set_title(("(b'') " if col == 0 else "(b''') ")
                      + "front speed: bars = node spacing / time between crossings",
                      fontsize=10, loc="left")
-        ax.legend(loc="upper left", fontsize=7.5, ncol=2)
+        if col == 0:
+            ax.legend(loc="lower left", fontsize=7.5, ncol=1, bbox_to_anchor=(0.13, 0.0))
 
     # energy: left log |Δ| over the event, right linear over the zoom
     terms = (("work_pilot", "ΔW pilot", "C0", "-"), ("elastic", "ΔU elastic", "C1", "-"),
@@ -374,19 +386,17 @@ def main():
              ("normal_work", "ΔN normal work", "C4", "-"), ("numerical", "ΔD_num numerical", "C5", "-"))
     ax = axs[3, 0]
     for n, lab, colr, ls in terms:
-        v = np.abs(d[n])
-        neg_part = d[n] < 0
-        ax.plot(tu, np.where(v > 0, v, np.nan), color=colr, ls=ls, lw=1.2, label=f"|{lab}|")
-        if neg_part.any() and n != "elastic":
-            ax.plot(tu[neg_part], v[neg_part], ".", color=colr, ms=2)
+        v = d[n]
+        ax.plot(tu, np.where(v > 0, v, np.nan), color=colr, lw=1.2, label=f"|{lab}|")
+        ax.plot(tu, np.where(v < 0, -v, np.nan), color=colr, lw=1.0, ls=(0, (2, 1.5)))
     ax.plot(tu, np.where(np.abs(imbalance) > 0, np.abs(imbalance), np.nan), color="k", lw=0.8,
             ls=":", label="|supply − sinks|")
     ax.set_yscale("log")
-    ax.set_ylim(1e-17, 1e-2)
+    ax.set_ylim(1e-15, 1e-2)
     ax.set_ylabel("|energy change| (N·mm/mm)")
-    ax.set_title("(c) energy budget from the event's start, |Δ| (dots: negative values)",
+    ax.set_title("(c) energy budget from the event's start, |Δ| (solid > 0, dashed < 0)",
                  fontsize=10, loc="left")
-    ax.legend(loc="lower right", fontsize=7.5, ncol=2)
+    ax.legend(loc="upper left", fontsize=7.5, ncol=2, bbox_to_anchor=(0.12, 1.0))
     ax = axs[3, 1]
     for n, lab, colr, ls in terms:
         ax.plot(tu[z], d[n][z], color=colr, ls=ls, lw=1.4, label=lab)
@@ -406,8 +416,9 @@ def main():
     if flick is not None:
         for r in range(1, 4):
             axs[r, 0].axvspan(*flick, color="0.85", zorder=0)
-        axs[1, 0].text(0.5 * (flick[0] + flick[1]), 0.62, "status\nflicker", ha="center",
-                       va="top", fontsize=8, color="0.35")
+        axs[1, 0].text(0.5 * (flick[0] + flick[1]), 0.5, "status\nflicker", ha="center",
+                       va="center", fontsize=8, color="0.25",
+                       transform=axs[1, 0].get_xaxis_transform())
     axs[0, 0].set_xlim(tu[0], tu[-1])
     axs[0, 1].set_xlim(tz, tu[-1])
     fig.tight_layout(rect=(0, 0, 1, 0.955))

@@ -1,7 +1,7 @@
 //! What a run records: the record of each converged step ([`StepRecord`], made by the
-//! [`crate::driver`]) and the friction summary of the run ([`FrictionSummary`], made by
-//! [`crate::report`] and judged by [`crate::checks`]). Plain data, below every module that
-//! reads it.
+//! [`crate::driver`]), the figures of each stage integrated in time ([`EventSummary`]) and the
+//! friction summary of the run ([`FrictionSummary`], made by [`crate::report`] and judged by
+//! [`crate::checks`]). Plain data, below every module that reads it.
 
 use crate::model::step::{ContactFigures, PilotState};
 use serde::Serialize;
@@ -78,5 +78,53 @@ impl FrictionSummary {
         self.f_d
             .map(|fd| fd * self.load)
             .filter(|fdp| q_max < (1.0 - 1e-3) * fdp)
+    }
+}
+
+/// How a dynamic stage ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EventEnd {
+    /// At its duration.
+    Duration,
+    /// The kinetic energy decayed (`until: "rest"`).
+    Rest,
+    /// Steady gross sliding at f_d (`until: "rest"`).
+    Sliding,
+    /// A time step failed (the run stops).
+    Failed,
+}
+
+/// The figures of one dynamic stage, for the summary.
+#[derive(Clone, Debug, Serialize)]
+pub struct EventSummary {
+    pub stage: usize,
+    /// Whether it followed a lost equilibrium (`on_lost_equilibrium`).
+    pub after_lost_equilibrium: bool,
+    pub rho_inf: f64,
+    pub dt: f64,
+    pub t_start: f64,
+    pub t_end: f64,
+    pub steps: usize,
+    pub newton_iterations: usize,
+    pub peak_kinetic: f64,
+    pub end: EventEnd,
+    /// Seconds to build and factorise `K + c M` (zero when reused) and to step.
+    pub factorise_s: f64,
+    pub wall_s: f64,
+}
+
+impl EventSummary {
+    /// How the stage ended, in words.
+    pub fn describe(&self) -> String {
+        let t = self.t_end;
+        match self.end {
+            EventEnd::Duration => format!("reached the end of its duration at t = {t:.6e}"),
+            EventEnd::Rest => format!("came to rest at t = {t:.6e}"),
+            EventEnd::Sliding => format!(
+                "ended in gross sliding at f_d at t = {t:.6e} (every contact node sliding at μ = f_d: under a force above f_d P the body accelerates)"
+            ),
+            EventEnd::Failed => format!("stopped at t = {t:.6e}: a time step failed"),
+        }
     }
 }

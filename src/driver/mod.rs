@@ -18,8 +18,8 @@ mod outcome;
 mod refuse;
 mod stage;
 
+pub use crate::record::{EventEnd, EventSummary};
 pub use checkpoint::Checkpoint;
-pub use dynamic::{EventEnd, EventSummary};
 pub use outcome::{Simulation, StepEvent};
 pub use refuse::{DISPLACEMENT_ERROR, beyond_friction_at_start, free_direction, refuse_unloadable};
 pub use stage::{MAX_CUTBACKS, STEP_BUDGET, STEP_BUDGET_MIN, step_budget};

@@ -52,5 +52,5 @@ pub struct Simulation {
     pub last_state: Option<State>,
     pub last_scale: f64,
     /// The stages integrated in time.
-    pub events: Vec<super::dynamic::EventSummary>,
+    pub events: Vec<crate::record::EventSummary>,
 }

@@ -83,7 +83,7 @@ pub(super) struct Driver<'a> {
     pub(super) motion: Option<crate::dynamics::TimeState>,
     /// Physical time reached by the dynamic stages so far.
     pub(super) physical_time: f64,
-    pub(super) events: Vec<super::dynamic::EventSummary>,
+    pub(super) events: Vec<crate::record::EventSummary>,
 }
 /// A stage being stepped: its fixed figures, where its load stands, and the counters of its
 /// cutbacks and probes.
