@@ -411,6 +411,20 @@ def main():
     ax.set_title("(c') energy budget from the event's start — zoom", fontsize=10, loc="left")
     ax.legend(loc="lower left", fontsize=7.5, ncol=2)
 
+    ax = axs[0, 1]
+    ax.plot([tu[kp[0] + 1]], [x[kp[1]]], "x", color="b", ms=8, mew=1.5)
+    ax.annotate(f"peak {peak:.3g} mm/s", (tu[kp[0] + 1], x[kp[1]]), xytext=(8, -22),
+                textcoords="offset points", color="b", fontsize=8,
+                bbox=dict(boxstyle="round,pad=0.2", fc="w", ec="none", alpha=0.7))
+    marks = [(c_van, "stick zone gone"), (b_van, "all at f_d")]
+    for r in range(1, 4):
+        for kv, lab in marks:
+            if kv is not None:
+                axs[r, 1].axvline(tu[kv], color="0.4", lw=0.7, ls=":")
+    for i, (kv, lab) in enumerate(marks):
+        if kv is not None:
+            axs[1, 1].text(tu[kv], 0.98 - 0.08 * i, " " + lab, fontsize=7.5, color="0.3",
+                           va="top", transform=axs[1, 1].get_xaxis_transform())
     for col in (0, 1):
         axs[3, col].set_xlabel("t after the event's start (µs)")
     if flick is not None:

@@ -464,8 +464,11 @@ pub fn summarise(
         events,
         ..
     } = sim;
+    // The quasi-static peak: the pilot force of a step integrated in time also moves the
+    // bodies' mass.
     let q_max = records
         .iter()
+        .filter(|r| r.kinetic.is_none())
         .filter_map(|r| r.pilot)
         .map(|p| p.fx.abs())
         .fold(0.0, f64::max);
@@ -487,6 +490,13 @@ pub fn summarise(
     let (failure, status) = judge(failure, lost_equilibrium, friction.as_ref(), &checks);
     let status = match (&failure, lost_equilibrium) {
         (Some(_), None) => format!("{status}; the output holds the steps before it"),
+        _ => status,
+    };
+    let status = match events.iter().rfind(|e| e.after_lost_equilibrium) {
+        Some(e) if lost_equilibrium.is_some() => format!(
+            "{status}; the jump under that load was integrated in time and {}",
+            e.describe()
+        ),
         _ => status,
     };
     let summary = Summary {

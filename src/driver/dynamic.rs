@@ -81,15 +81,17 @@ impl Driver<'_> {
             (scale, start.control_at(target, a))
         };
         let last_stage = si + 1 == self.case.stages.len();
-        let end = self.integrate(si, spec, false, &load, last_stage, on_step)?;
+        let end = self.integrate(si, spec, (false, 0.0), &load, last_stage, on_step)?;
         Ok(end != EventEnd::Failed)
     }
 
     /// The event after a lost equilibrium in stage `si`: the load `held` (the first without
-    /// equilibrium) integrated in time from the last converged state. Returns how it ended.
+    /// equilibrium, at the fraction `alpha` of the stage) integrated in time from the last
+    /// converged state. Returns how it ended.
     pub(super) fn run_event(
         &mut self,
         si: usize,
+        alpha: f64,
         held: (f64, [Control; 2]),
         on_step: &mut dyn FnMut(&StepEvent) -> Result<(), RunError>,
     ) -> Result<EventEnd, RunError> {
@@ -102,15 +104,18 @@ impl Driver<'_> {
             .clone();
         self.motion = None;
         let load = move |_: f64| held;
-        self.integrate(si, &spec, true, &load, false, on_step)
+        self.integrate(si, &spec, (true, alpha), &load, false, on_step)
     }
 
-    /// Steps `spec` in time with the loads `load(τ)`.
+    /// Steps `spec` in time with the loads `load(τ)`. `after_lost`: the event after a lost
+    /// equilibrium at the fraction `alpha0` of stage `si`, whose steps' pseudo-time runs from
+    /// there towards the stage's end over the event's duration (a dynamic stage's from its
+    /// start, `alpha0` = 0).
     fn integrate(
         &mut self,
         si: usize,
         spec: &DynamicSpec,
-        after_lost: bool,
+        (after_lost, alpha0): (bool, f64),
         load: LoadAt,
         last_stage: bool,
         on_step: &mut dyn FnMut(&StepEvent) -> Result<(), RunError>,
@@ -239,7 +244,9 @@ impl Driver<'_> {
                     .cstate
                     .as_ref()
                     .map(|st| model.contact_figures(st, self.law.as_ref()));
-                let pseudo = si as f64 + (now.time - summary.t_start) / (n_steps as f64 * dt);
+                let pseudo = si as f64
+                    + alpha0
+                    + (1.0 - alpha0) * (now.time - summary.t_start) / (n_steps as f64 * dt);
                 self.records.push(StepRecord {
                     step,
                     stage: si,

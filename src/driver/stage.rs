@@ -278,9 +278,16 @@ impl Driver<'_> {
                     }
                     if self.lost_equilibrium.is_some() && self.case.on_lost_equilibrium.is_some() {
                         // The jump integrated in time under the first load without equilibrium.
-                        self.failure = None;
-                        let end = self.run_event(si, (aim.scale, aim.control), on_step)?;
+                        let lost = self.failure.take();
+                        let end =
+                            self.run_event(si, aim.alpha, (aim.scale, aim.control), on_step)?;
+                        if end != super::EventEnd::Failed {
+                            // The stop stays the lost equilibrium's, unless the event came
+                            // to rest.
+                            self.failure = lost;
+                        }
                         if end == super::EventEnd::Rest {
+                            self.failure = None;
                             // Re-stuck: the stage goes on from the load held.
                             self.lost_equilibrium = None;
                             s.alpha = aim.alpha;

@@ -30,10 +30,11 @@
 //! on the balance at mid-step, and for a linear elastic body without contact
 //! `Δ(½ vᵀMv + ½ uᵀKu) = ½ (f_{n+1} + f_n)·Δu` exactly: the trapezoidal work of
 //! [`crate::energy`]. For ρ∞ < 1 the balance's residual is the scheme's own dissipation.
-//! Contact forces taken at `t_{n+1}` on a gap closed at `t_{n+1}` do no positive work: a node
-//! that closes does `−F_n Δg ≤ 0`, one that opens has `F_n = 0`, and a stick node has no
-//! relative tangential motion, so the treatment of contact in time can dissipate energy at
-//! impacts (reported as `normal_work`) but never adds any.
+//! The contact forces are weighed like every force (`1 − αf`, `αf`); booked with the
+//! trapezoid, a node that closes does `−½ F_n Δg ≤ 0`, one that stays closed or stuck does
+//! none, and only a node that opens (`+½ F_n^old Δg`) or a slip that reverses can give energy
+//! back: reported in `normal_work` and `dissipation` (`docs/dynamics.md` has the measured
+//! figures).
 
 mod integrator;
 mod masses;
