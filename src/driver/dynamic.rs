@@ -34,10 +34,9 @@ type LoadAt<'a> = &'a dyn Fn(f64) -> (f64, [Control; 2]);
 /// Halvings of a dynamic stage's time step before a step is given up.
 pub const MAX_DT_HALVINGS: usize = 3;
 
-/// A time step taken: the state it reached, its load, its Newton iterations and the halvings
-/// of the stage's Δt it took.
+/// A time step taken (beside the motion it reached): its contact state, load, Newton
+/// iterations and the halvings of the stage's Δt it took.
 struct Sub {
-    time: TimeState,
     contact: Option<State>,
     iterations: usize,
     scale: f64,
@@ -45,6 +44,52 @@ struct Sub {
     halvings: usize,
     dt: f64,
     wall: f64,
+}
+
+/// The end criteria of `until: "rest"` ([`DynamicSpec`]), observed at the end of each of a
+/// stage's time steps.
+struct EndWatch {
+    rest: bool,
+    ratio: f64,
+    window: usize,
+    /// From when the loads are at their targets (the stage's time).
+    ramp: f64,
+    recent: std::collections::VecDeque<f64>,
+    sliding_run: usize,
+}
+
+impl EndWatch {
+    fn new(spec: &DynamicSpec, after_lost: bool) -> EndWatch {
+        EndWatch {
+            rest: spec.until == crate::case::Until::Rest,
+            ratio: spec.rest_ratio,
+            window: spec.rest_window,
+            ramp: if after_lost { 0.0 } else { spec.ramp_time() },
+            recent: Default::default(),
+            sliding_run: 0,
+        }
+    }
+
+    /// The end reached at stage time `tau` with kinetic energy `kinetic` (its peak so far
+    /// `peak`), `sliding` when every contact node slides at f_d.
+    fn observe(&mut self, tau: f64, kinetic: f64, peak: f64, sliding: bool) -> Option<EventEnd> {
+        self.recent.push_back(kinetic);
+        if self.recent.len() > self.window {
+            self.recent.pop_front();
+        }
+        self.sliding_run = if sliding { self.sliding_run + 1 } else { 0 };
+        if !self.rest || tau < self.ramp || self.recent.len() < self.window {
+            return None;
+        }
+        let top = self.recent.iter().cloned().fold(0.0, f64::max);
+        if peak > 0.0 && top <= self.ratio * peak {
+            Some(EventEnd::Rest)
+        } else if self.sliding_run >= self.window {
+            Some(EventEnd::Sliding)
+        } else {
+            None
+        }
+    }
 }
 
 /// Why a time step gave no state: the step itself, or building a halved step's matrix.
@@ -107,6 +152,36 @@ impl Driver<'_> {
         self.integrate(si, &spec, (true, alpha), &load, false, on_step)
     }
 
+    /// After a lost equilibrium at the fraction `alpha` of stage `si` under the load `held`:
+    /// with `on_lost_equilibrium`, the event integrated in time ([`Driver::run_event`]). The
+    /// run's stop stays the lost equilibrium's unless the event came to rest: then `true`,
+    /// and the stage goes on from the load held.
+    pub(super) fn event_after_lost(
+        &mut self,
+        si: usize,
+        alpha: f64,
+        held: (f64, [Control; 2]),
+        on_step: &mut dyn FnMut(&StepEvent) -> Result<(), RunError>,
+    ) -> Result<bool, RunError> {
+        if self.lost_equilibrium.is_none() || self.case.on_lost_equilibrium.is_none() {
+            return Ok(false);
+        }
+        let lost = self.failure.take();
+        let end = self.run_event(si, alpha, held, on_step)?;
+        match end {
+            EventEnd::Rest => {
+                self.lost_equilibrium = None;
+                Ok(true)
+            }
+            // A failed time step is the run's stop.
+            EventEnd::Failed => Ok(false),
+            _ => {
+                self.failure = lost;
+                Ok(false)
+            }
+        }
+    }
+
     /// Steps `spec` in time with the loads `load(τ)`. `after_lost`: the event after a lost
     /// equilibrium at the fraction `alpha0` of stage `si`, whose steps' pseudo-time runs from
     /// there towards the stage's end over the event's duration (a dynamic stage's from its
@@ -124,30 +199,10 @@ impl Driver<'_> {
         let (n_steps, dt) = spec.steps_and_dt();
         let scheme = Scheme::new(spec.rho_inf);
         let factorise_s = self.integrator_for(scheme, dt)?;
-        let model = self.model;
-        let now = match self.motion.take() {
+        let mut now = match self.motion.take() {
             Some(m) => m,
-            None => {
-                let u = match (&self.cstate, &self.last_u) {
-                    (Some(st), _) if !self.records.is_empty() => {
-                        model.contact_displacement(self.scale, st)
-                    }
-                    (None, Some(u)) => u.clone(),
-                    _ => vec![0.0; model.dofs.n_free()],
-                };
-                let pilot = model.dofs.pilot.map(|_| self.pilot);
-                let integ = &self.integrators[0];
-                integ.at_rest(
-                    model,
-                    self.physical_time,
-                    self.scale,
-                    u,
-                    self.cstate.as_ref(),
-                    pilot,
-                )
-            }
+            None => self.at_rest(),
         };
-        let mut now = now;
         let mut summary = EventSummary {
             stage: si,
             after_lost_equilibrium: after_lost,
@@ -162,14 +217,10 @@ impl Driver<'_> {
             factorise_s,
             wall_s: 0.0,
         };
-        let window = spec.rest_window;
-        let mut recent_ke: std::collections::VecDeque<f64> = Default::default();
-        let mut sliding_run = 0usize;
-        let ramp = if after_lost { 0.0 } else { spec.ramp_time() };
+        let mut watch = EndWatch::new(spec, after_lost);
         let f_d = self.law.as_ref().and_then(|l| l.f_dynamic().ok());
         for k in 1..=n_steps {
             let tau = k as f64 * dt;
-            let step = self.records.len() + 1;
             let st = self.cstate.clone();
             let subs = match self.advance(scheme, 0, &now, st.as_ref(), tau - dt, load) {
                 Ok(s) => s,
@@ -186,82 +237,27 @@ impl Driver<'_> {
                     summary.end = EventEnd::Failed;
                     self.events.push(summary);
                     self.motion = Some(now);
-                    self.stop(step, e, None);
+                    self.stop(self.records.len() + 1, e, None);
                     return Ok(EventEnd::Failed);
                 }
             };
             let n_subs = subs.len();
-            for (i, sub) in subs.into_iter().enumerate() {
-                let nominal_end = i + 1 == n_subs;
-                now = sub.time;
-                self.physical_time = now.time;
-                self.scale = sub.scale;
-                self.control = sub.control;
-                if let Some(p) = now.pilot {
-                    self.pilot = p;
-                }
-                if sub.contact.is_some() {
-                    self.cstate = sub.contact;
-                }
-                self.last_u = Some(now.u.clone());
-                self.newton_total += sub.iterations;
+            for (i, (time, sub)) in subs.into_iter().enumerate() {
+                now = self.take_sub(time, &sub);
                 summary.newton_iterations += sub.iterations;
                 summary.peak_kinetic = summary.peak_kinetic.max(now.kinetic);
                 summary.t_end = now.time;
-                let mut end = None;
-                if nominal_end {
+                // The end criteria and the nominal index, at the end of a stage's time step.
+                let nominal_end = i + 1 == n_subs;
+                let end = if nominal_end {
                     summary.steps = k;
-                    // The end criteria, once the loads are at their targets.
-                    recent_ke.push_back(now.kinetic);
-                    if recent_ke.len() > window {
-                        recent_ke.pop_front();
-                    }
-                    sliding_run = if self.all_sliding(f_d) {
-                        sliding_run + 1
-                    } else {
-                        0
-                    };
-                    if spec.until == crate::case::Until::Rest
-                        && tau >= ramp
-                        && recent_ke.len() == window
-                    {
-                        let top = recent_ke.iter().cloned().fold(0.0, f64::max);
-                        if summary.peak_kinetic > 0.0
-                            && top <= spec.rest_ratio * summary.peak_kinetic
-                        {
-                            end = Some(EventEnd::Rest);
-                        } else if sliding_run >= window {
-                            end = Some(EventEnd::Sliding);
-                        }
-                    }
-                    if k == n_steps && end.is_none() {
-                        end = Some(EventEnd::Duration);
-                    }
-                }
-                self.t_solve += sub.wall;
-                let step = self.records.len() + 1;
-                let figures = self
-                    .cstate
-                    .as_ref()
-                    .map(|st| model.contact_figures(st, self.law.as_ref()));
-                let pseudo = si as f64
-                    + alpha0
-                    + (1.0 - alpha0) * (now.time - summary.t_start) / (n_steps as f64 * dt);
-                self.records.push(StepRecord {
-                    step,
-                    stage: si,
-                    time: pseudo,
-                    traction_scale: sub.scale,
-                    pilot: model.dofs.pilot.is_some().then_some(self.pilot),
-                    iterations: sub.iterations,
-                    cutbacks: sub.halvings,
-                    contact: figures,
-                    wall_s: sub.wall,
-                    cycle: self.case.stages[si].cycle,
-                    physical_time: Some(now.time),
-                    kinetic: Some(now.kinetic),
-                });
-                let last = last_stage && end.is_some() && !after_lost;
+                    let sliding = self.all_sliding(f_d);
+                    watch
+                        .observe(tau, now.kinetic, summary.peak_kinetic, sliding)
+                        .or((k == n_steps).then_some(EventEnd::Duration))
+                } else {
+                    None
+                };
                 // The nominal index of a step of the event after a lost equilibrium is its
                 // own count (the stage's nominal loads are the quasi-static ones).
                 let nominal = nominal_end.then(|| {
@@ -271,23 +267,16 @@ impl Driver<'_> {
                         self.nominal_before(si) + k
                     }
                 });
-                on_step(&StepEvent {
-                    step,
-                    time: pseudo,
-                    scale: sub.scale,
-                    last,
-                    nominal,
-                    u: Some(&now.u),
-                    contact: self.cstate.as_ref(),
-                    record: self.records.last().expect("pushed above"),
-                    checkpoint: None,
-                    dt: Some(sub.dt),
-                })?;
+                let pseudo = si as f64
+                    + alpha0
+                    + (1.0 - alpha0) * (now.time - summary.t_start) / (n_steps as f64 * dt);
+                let last = last_stage && end.is_some() && !after_lost;
+                self.record_sub(si, &sub, &now, (pseudo, nominal, last), on_step)?;
                 if let Some(e) = end {
                     summary.end = e;
                 }
             }
-            if summary.end != EventEnd::Duration || k == n_steps {
+            if summary.end != EventEnd::Duration {
                 break;
             }
         }
@@ -311,6 +300,87 @@ impl Driver<'_> {
         self.events.push(summary);
         self.motion = Some(now);
         Ok(end)
+    }
+
+    /// The state at rest the motion starts from after a quasi-static stage: its last
+    /// converged field, zero velocity and acceleration.
+    fn at_rest(&self) -> TimeState {
+        let model = self.model;
+        let u = match (&self.cstate, &self.last_u) {
+            (Some(st), _) if !self.records.is_empty() => model.contact_displacement(self.scale, st),
+            (None, Some(u)) => u.clone(),
+            _ => vec![0.0; model.dofs.n_free()],
+        };
+        let pilot = model.dofs.pilot.map(|_| self.pilot);
+        self.integrators[0].at_rest(
+            model,
+            self.physical_time,
+            self.scale,
+            u,
+            self.cstate.as_ref(),
+            pilot,
+        )
+    }
+
+    /// Takes the time step `sub` as the driver's state; returns its motion.
+    fn take_sub(&mut self, time: TimeState, sub: &Sub) -> TimeState {
+        self.physical_time = time.time;
+        self.scale = sub.scale;
+        self.control = sub.control;
+        if let Some(p) = time.pilot {
+            self.pilot = p;
+        }
+        if sub.contact.is_some() {
+            self.cstate = sub.contact.clone();
+        }
+        self.last_u = Some(time.u.clone());
+        self.newton_total += sub.iterations;
+        self.t_solve += sub.wall;
+        time
+    }
+
+    /// Records the time step `sub` of stage `si` (reaching `now`) and hands it to `on_step`
+    /// with its pseudo-time, nominal index and whether it is the run's last.
+    fn record_sub(
+        &mut self,
+        si: usize,
+        sub: &Sub,
+        now: &TimeState,
+        (pseudo, nominal, last): (f64, Option<usize>, bool),
+        on_step: &mut dyn FnMut(&StepEvent) -> Result<(), RunError>,
+    ) -> Result<(), RunError> {
+        let model = self.model;
+        let step = self.records.len() + 1;
+        let figures = self
+            .cstate
+            .as_ref()
+            .map(|st| model.contact_figures(st, self.law.as_ref()));
+        self.records.push(StepRecord {
+            step,
+            stage: si,
+            time: pseudo,
+            traction_scale: sub.scale,
+            pilot: model.dofs.pilot.is_some().then_some(self.pilot),
+            iterations: sub.iterations,
+            cutbacks: sub.halvings,
+            contact: figures,
+            wall_s: sub.wall,
+            cycle: self.case.stages[si].cycle,
+            physical_time: Some(now.time),
+            kinetic: Some(now.kinetic),
+        });
+        on_step(&StepEvent {
+            step,
+            time: pseudo,
+            scale: sub.scale,
+            last,
+            nominal,
+            u: Some(&now.u),
+            contact: self.cstate.as_ref(),
+            record: self.records.last().expect("pushed above"),
+            checkpoint: None,
+            dt: Some(sub.dt),
+        })
     }
 
     /// The integrators of time step `dt` and `scheme` (and of its halvings), kept unless the
@@ -354,7 +424,7 @@ impl Driver<'_> {
         st: Option<&State>,
         tau0: f64,
         load: LoadAt,
-    ) -> Result<Vec<Sub>, Failure> {
+    ) -> Result<Vec<(TimeState, Sub)>, Failure> {
         let t = Instant::now();
         while self.integrators.len() <= level {
             let dt = self.integrators[0].dt / (1u64 << self.integrators.len()) as f64;
@@ -363,7 +433,7 @@ impl Driver<'_> {
         }
         // A node on the friction limit may flip its set at round-off level from one iteration
         // to the next; a time step cannot cut its load back, so it settles there.
-        let copt = self.copt.clone().map(|mut o| {
+        let copt = self.copt.map(|mut o| {
             o.settle_round_off = true;
             o
         });
@@ -375,16 +445,18 @@ impl Driver<'_> {
         let error = match tried {
             Ok(s) if s.time.u.iter().all(|v| v.is_finite()) => {
                 integ.lu.end_step();
-                return Ok(vec![Sub {
-                    time: s.time,
-                    contact: s.contact,
-                    iterations: s.iterations,
-                    scale,
-                    control,
-                    halvings: level,
-                    dt: h,
-                    wall: t.elapsed().as_secs_f64(),
-                }]);
+                return Ok(vec![(
+                    s.time,
+                    Sub {
+                        contact: s.contact,
+                        iterations: s.iterations,
+                        scale,
+                        control,
+                        halvings: level,
+                        dt: h,
+                        wall: t.elapsed().as_secs_f64(),
+                    },
+                )]);
             }
             Ok(_) => StepError::NotFinite,
             Err(e) => e,
@@ -400,7 +472,7 @@ impl Driver<'_> {
         }
         let mut first = self.advance(scheme, level + 1, now, st, tau0, load)?;
         let mid = first.last().expect("at least one step");
-        let (mid_time, mid_contact) = (mid.time.clone(), mid.contact.clone());
+        let (mid_time, mid_contact) = (mid.0.clone(), mid.1.contact.clone());
         let second = self.advance(
             scheme,
             level + 1,

@@ -276,27 +276,14 @@ impl Driver<'_> {
                     if self.cut_back(&mut s, step, e, &aim) {
                         continue;
                     }
-                    if self.lost_equilibrium.is_some() && self.case.on_lost_equilibrium.is_some() {
-                        // The jump integrated in time under the first load without equilibrium.
-                        let lost = self.failure.take();
-                        let end =
-                            self.run_event(si, aim.alpha, (aim.scale, aim.control), on_step)?;
-                        if end != super::EventEnd::Failed {
-                            // The stop stays the lost equilibrium's, unless the event came
-                            // to rest.
-                            self.failure = lost;
-                        }
-                        if end == super::EventEnd::Rest {
-                            self.failure = None;
-                            // Re-stuck: the stage goes on from the load held.
-                            self.lost_equilibrium = None;
-                            s.alpha = aim.alpha;
-                            s.dalpha = s.nominal;
-                            s.k_next = next_nominal(s.alpha, s.steps);
-                            s.older = None;
-                            (s.attempts, s.probed, s.cutbacks) = (0, false, 0);
-                            continue;
-                        }
+                    if self.event_after_lost(si, aim.alpha, (aim.scale, aim.control), on_step)? {
+                        // Re-stuck: the stage goes on from the load held.
+                        s.alpha = aim.alpha;
+                        s.dalpha = s.nominal;
+                        s.k_next = next_nominal(s.alpha, s.steps);
+                        s.older = None;
+                        (s.attempts, s.probed, s.cutbacks) = (0, false, 0);
+                        continue;
                     }
                     return Ok(false);
                 }
