@@ -139,8 +139,9 @@ fn wave_errors(kind: &str, held: &str, c: f64, comp: usize, name: &str) -> Vec<[
 }
 
 /// Every level within 1 % in speed and arrival (measured: 2e-3 and 8e-4 at h = 0.5), the
-/// finest within 1e-4 (measured 1e-5 to 5e-5), the errors falling over the ladder.
-fn assert_waves(errs: &[[f64; 3]]) {
+/// finest within 1e-4 (measured 1e-5 to 5e-5), the errors falling over the ladder; the
+/// validation row `key` for the wave `wave` (speed `c`).
+fn assert_waves(errs: &[[f64; 3]], key: &str, wave: &str, c: &str) {
     for e in errs {
         assert!(e.iter().all(|x| *x < 0.01), "{errs:?}");
     }
@@ -149,20 +150,50 @@ fn assert_waves(errs: &[[f64; 3]]) {
         assert!(w[1][0] < w[0][0], "speed error does not fall: {errs:?}");
         assert!(w[1][1] < w[0][1], "arrival error does not fall: {errs:?}");
     }
+    let col = |k: usize| {
+        errs.iter()
+            .map(|e| sci(e[k]))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    validation_row(
+        key,
+        &format!(
+            "{wave} wave in a strip (generalised-α, ρ∞ = 1, consistent mass), step traction, h = 0.5, 0.25, 0.125 with Δt = h/(2c)"
+        ),
+        &format!("{c}; arrival 5/c + Δt/2; particle speed τ/(ρc)"),
+        &format!(
+            "speed error {} (asserted < 1 %, finest < 1e-4, falling); arrival {}; particle speed {}",
+            col(0),
+            col(1),
+            col(2)
+        ),
+        "dynamics",
+    );
 }
 
 #[test]
 fn p_wave_arrives_at_x_over_c_p_within_one_percent_converging_in_h_and_dt() {
     let (l, m) = lame();
     let c_p = ((l + 2.0 * m) / RHO).sqrt();
-    assert_waves(&wave_errors("tx", "uy", c_p, 0, "pwave"));
+    assert_waves(
+        &wave_errors("tx", "uy", c_p, 0, "pwave"),
+        "400-p-wave",
+        "P",
+        "c_p = sqrt((λ + 2μ)/ρ)",
+    );
 }
 
 #[test]
 fn s_wave_arrives_at_x_over_c_s_within_one_percent_converging_in_h_and_dt() {
     let (_, m) = lame();
     let c_s = (m / RHO).sqrt();
-    assert_waves(&wave_errors("ty", "ux", c_s, 1, "swave"));
+    assert_waves(
+        &wave_errors("ty", "ux", c_s, 1, "swave"),
+        "401-s-wave",
+        "S",
+        "c_s = sqrt(μ/ρ)",
+    );
 }
 
 /// The strip stretched quasi-statically, then released: a free vibration with no external
@@ -221,6 +252,17 @@ fn a_free_vibration_keeps_its_energy_over_1000_steps_with_rho_inf_one() {
     // The balance closes to round-off: the scheme dissipates nothing.
     let num = rows.last().unwrap().numerical;
     assert!(num.abs() < 1e-12 * e1, "numerical dissipation {num:.3e}");
+    validation_row(
+        "402-energy-conserved",
+        "free vibration of a strip released from a static stretch, ρ∞ = 1, 1 000 steps",
+        "total energy ½vᵀMv + ½uᵀKu constant (the trapezoidal rule's energy identity)",
+        &format!(
+            "largest relative drift {} (asserted < 1e-12); `numerical` {}",
+            sci(worst),
+            sci(num.abs() / e1)
+        ),
+        "dynamics",
+    );
 }
 
 #[test]
@@ -249,6 +291,16 @@ fn with_rho_inf_below_one_the_energy_lost_is_booked_as_the_schemes_dissipation()
     }
     // The lower ρ∞, the more the high frequencies are damped.
     assert!(drops[1] > drops[0], "{drops:?}");
+    validation_row(
+        "403-energy-dissipated",
+        "the same vibration with ρ∞ = 0.9 and 0.5, 400 steps",
+        "the energy lost booked as the scheme's `numerical` dissipation, the quasi-static residual untouched; more loss at lower ρ∞",
+        &format!(
+            "lost {:.2e} and {:.2e} (asserted > 0, increasing), booked to 1e-12",
+            drops[0], drops[1]
+        ),
+        "dynamics",
+    );
 }
 
 /// Fig. 2's law on VM272 L2 with the density of a polymer (units mm, N, s: ρ in t/mm³); the
@@ -312,6 +364,7 @@ fn a_slow_force_ramp_in_time_follows_the_quasi_static_curve() {
     );
     assert!(num.abs() < 1e-12 * work, "{num:.3e}");
     assert!(dis > 1e-6 * work);
+
     let (q_s, u_s) = stage1(&qs, "pilot_fx", "pilot_ux");
     let (q_d, u_d) = stage1(&dy, "pilot_fx", "pilot_ux");
     let u_max = u_s.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -323,6 +376,17 @@ fn a_slow_force_ramp_in_time_follows_the_quasi_static_curve() {
         .fold(0.0, f64::max);
     eprintln!("force ramp in time: largest displacement difference {worst:.2e} of the largest");
     assert!(worst < 1e-3, "{worst:.3e}");
+    validation_row(
+        "404-quasi-static-force",
+        "Fig. 2's law on VM272 L2, the tangential force ramped smoothly in time over 0.1 s (ρ∞ = 1)",
+        "the quasi-static Q–displacement curve (200 steps); the energy balance with friction",
+        &format!(
+            "displacement within {} of the largest (asserted < 1e-3); `numerical` {} of the work",
+            sci(worst),
+            sci(num.abs() / work)
+        ),
+        "dynamics",
+    );
 }
 
 /// The peak tangential force Q_max reached in time under slip control (the mean slip ramped
@@ -362,6 +426,17 @@ fn q_max_reached_slowly_in_time_is_the_quasi_static_one() {
     );
     assert!(rel < 1e-3);
     assert!(worst < 1e-3, "{worst:.3e}");
+    validation_row(
+        "405-quasi-static-qmax",
+        "Fig. 2's law on VM272 L2 under slip control in time (smooth ramp over 0.08 s, ρ∞ = 0.5)",
+        "the quasi-static Q_max and rising branch (200 steps)",
+        &format!(
+            "Q_max within {} (asserted < 1e-3); rising branch within {} of Q_max (asserted < 1e-3)",
+            sci(rel),
+            sci(worst)
+        ),
+        "dynamics",
+    );
 }
 
 #[test]
