@@ -79,12 +79,14 @@ impl Factor {
     }
 }
 
-/// The values of `K̂ = K + k_g E Eᵀ` (springs on the `grounded` retained DOFs), the springs
+/// The values of `K̂ = K + k_g E Eᵀ` (springs on the `grounded` retained DOFs: `springs[i]`
+/// on `grounded[i]` where given, else the matrix's own diagonal entry there), the springs
 /// (retained index, `k_g`) and the largest diagonal entry of `K_RR`.
 fn grounded_values(
     k: &UpperCsc,
     n_i: usize,
     grounded: &[usize],
+    springs: Option<&[f64]>,
 ) -> (Vec<f64>, Vec<(usize, f64)>, f64) {
     let mut values = k.values.clone();
     let diag = |c: usize| k.position(c, c);
@@ -92,9 +94,12 @@ fn grounded_values(
         .map(|c| k.values[diag(c)].abs())
         .fold(0.0, f64::max);
     let mut grounding = Vec::new();
-    for &r in grounded {
+    for (i, &r) in grounded.iter().enumerate() {
         let p = diag(n_i + r);
-        let kg = k.values[p].abs().max(f64::MIN_POSITIVE);
+        let kg = match springs {
+            Some(s) => s[i],
+            None => k.values[p].abs().max(f64::MIN_POSITIVE),
+        };
         values[p] += kg;
         grounding.push((r, kg));
     }
@@ -123,7 +128,20 @@ impl Condensed {
         grounded: &[usize],
         symbolic: &PartialSymbolic,
     ) -> Result<Condensed, FactorError> {
-        let (values, grounding, krr_scale) = grounded_values(k, n_i, grounded);
+        Self::build_with_springs(k, n_i, grounded, None, symbolic)
+    }
+
+    /// [`Condensed::build`] with the springs' stiffnesses `springs` (one per grounded DOF)
+    /// instead of the matrix's diagonal: models of one case that share them (the quasi-static
+    /// one and those of its time steps) hold the same anchor unknowns for the same forces.
+    pub fn build_with_springs(
+        k: &UpperCsc,
+        n_i: usize,
+        grounded: &[usize],
+        springs: Option<&[f64]>,
+        symbolic: &PartialSymbolic,
+    ) -> Result<Condensed, FactorError> {
+        let (values, grounding, krr_scale) = grounded_values(k, n_i, grounded, springs);
         let chol = Factor::Partial(symbolic.factorise(&k.col_ptr, &k.row_idx, &values)?);
         Ok(Condensed {
             n_i,
@@ -137,15 +155,16 @@ impl Condensed {
     /// As [`Condensed::build`] for a contact model: factorises the saddle-point matrix
     /// `[K̂ Yᵀ; Y 0]` with the constraint rows `y_rows` (free-DOF index, coefficient), which
     /// must end with one unit row per grounded DOF, as analysed by `symbolic`.
+    /// `springs`: as in [`Condensed::build_with_springs`].
     pub fn build_saddle(
         k: &UpperCsc,
         n_i: usize,
-        grounded: &[usize],
+        (grounded, springs): (&[usize], Option<&[f64]>),
         y_rows: &[Vec<(usize, f64)>],
         symbolic: &SaddleSymbolic,
         dest: Option<Box<dyn crate::la::ValuesDestination>>,
     ) -> Result<Condensed, FactorError> {
-        let (values, grounding, krr_scale) = grounded_values(k, n_i, grounded);
+        let (values, grounding, krr_scale) = grounded_values(k, n_i, grounded, springs);
         let chol = Factor::Saddle(symbolic.factorise_in(&values, y_rows, dest)?);
         Ok(Condensed {
             n_i,

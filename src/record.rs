@@ -82,7 +82,7 @@ impl FrictionSummary {
 }
 
 /// How a dynamic stage ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EventEnd {
     /// At its duration.
@@ -96,7 +96,7 @@ pub enum EventEnd {
 }
 
 /// The figures of one dynamic stage, for the summary.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct EventSummary {
     pub stage: usize,
     /// Whether it followed a lost equilibrium (`on_lost_equilibrium`).

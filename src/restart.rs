@@ -40,6 +40,10 @@ pub struct SavedRun {
     /// The `.pvd` entries up to this state, made from the journal's written steps.
     #[serde(skip)]
     pub pvd: Vec<PvdEntry>,
+    /// The entries of `<stem>_time.pvd` up to this state (the written steps integrated in
+    /// time), made from the journal.
+    #[serde(skip)]
+    pub time_pvd: Vec<PvdEntry>,
     /// The journal's lines up to this state, which a resumed run's journal begins with.
     #[serde(skip)]
     pub journal: String,
@@ -61,9 +65,27 @@ pub struct JournalLine {
 /// The `.pvd` entries of the written steps among `lines`, as [`crate::output::series`] names
 /// a step's files (case `stem`).
 pub fn pvd_entries(lines: &[JournalLine], stem: &str) -> Vec<PvdEntry> {
+    entries_at(lines, stem, |r| Some(r.time))
+}
+
+/// The entries of `<stem>_time.pvd` for the written steps integrated in time among `lines`, at
+/// their physical time.
+pub fn time_pvd_entries(lines: &[JournalLine], stem: &str) -> Vec<PvdEntry> {
+    entries_at(lines, stem, |r| r.physical_time)
+}
+
+/// The `.pvd` entries of the written steps among `lines` that `time` gives a time.
+fn entries_at(
+    lines: &[JournalLine],
+    stem: &str,
+    time: impl Fn(&crate::record::StepRecord) -> Option<f64>,
+) -> Vec<PvdEntry> {
     let mut entries = Vec::new();
     for l in lines.iter().filter(|l| l.written) {
-        let (step, time) = (l.record.step, l.record.time);
+        let Some(time) = time(&l.record) else {
+            continue;
+        };
+        let step = l.record.step;
         entries.push(PvdEntry {
             time,
             part: 0,
@@ -202,6 +224,7 @@ pub fn load(path: &Path, case: &Case, case_path: &Path) -> Result<SavedRun, RunE
         .map(|s| s.to_string_lossy().to_string())
         .unwrap_or("case".into());
     saved.pvd = pvd_entries(&lines, &stem);
+    saved.time_pvd = time_pvd_entries(&lines, &stem);
     saved.journal = journal_text(&lines);
     if let Some(e) = saved.energy.as_mut() {
         e.set_rows(lines.iter().filter_map(|l| l.energy.clone()).collect());

@@ -10,7 +10,7 @@ use common::{mesh_path, shipped_case, stickslip, tempdir, validation_row};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
-const TIMING_KEYS: [&str; 11] = [
+const TIMING_KEYS: [&str; 12] = [
     // Counts the journal, whose wall times vary in their digits.
     "output_bytes",
     "factor_flops",
@@ -23,6 +23,7 @@ const TIMING_KEYS: [&str; 11] = [
     "output_dir",
     "t_solve",
     "t_contact",
+    "factorise_s",
 ];
 
 fn strip(v: &mut Value) {
@@ -367,4 +368,47 @@ fn a_state_written_by_another_build_is_refused() {
     // The build that wrote it resumes it.
     let status = with_other(&dir.join("again"), &["--resume", state.to_str().unwrap()]);
     assert!(status.success(), "the other build's resume: {status}");
+}
+
+/// A run with a stage integrated in time between two quasi-static ones (Fig. 2's law on L2),
+/// cut at a state of the last stage and resumed from it, writes what the uninterrupted run
+/// writes, `<case>_time.pvd` of the dynamic stage's steps included (dynamic stages take no
+/// checkpoints: the resumed run starts after it).
+#[test]
+fn a_run_resumed_after_a_dynamic_stage_writes_what_the_uninterrupted_run_writes() {
+    let dir = tempdir("restart-dynamic");
+    let mut v = shipped_case("fig2.json");
+    v["mesh"] = mesh_path("vm272_L2.msh");
+    for b in v["bodies"].as_array_mut().unwrap() {
+        b["density"] = json!(1.2e-9);
+    }
+    v["stages"][1] = json!({"name": "in time", "pilot_x": {"force": 0.4},
+        "dynamic": {"dt": 5e-6, "duration": 1e-4, "ramp_shape": "smooth"}});
+    v["stages"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"name": "quasi-static", "steps": 10, "pilot_x": {"force": 0.8}}));
+    v["output"] = json!({"every": 5, "energy": true});
+    let case = dir.join("case.json");
+    std::fs::write(&case, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    let whole = dir.join("whole");
+    let (code, err) = run(&case, &whole, &[]);
+    assert_eq!(code, 0, "{err}");
+    assert!(whole.join("case_time.pvd").is_file());
+    let cut = dir.join("cut");
+    let (code, err) = run(&case, &cut, &[]);
+    assert_eq!(code, 0, "{err}");
+    // The last state but one: in the last stage (the dynamic stage's 20 steps follow step 1).
+    let all = states(&cut);
+    let (at, state) = all[all.len() - 2].clone();
+    assert!(at > 21, "state at step {at}");
+    keep_up_to(&cut, at);
+    let (code, err) = run(&case, &cut, &["--resume", state.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let (diff, files) = differences(&whole, &cut);
+    println!("{files} files compared");
+    assert!(
+        diff.is_empty(),
+        "the run resumed at step {at} differs in {diff:?}"
+    );
 }

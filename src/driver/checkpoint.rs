@@ -33,6 +33,12 @@ pub struct Checkpoint {
     pub last_u: Option<Vec<f64>>,
     pub(super) t_solve: f64,
     pub(super) t_contact: f64,
+    /// Physical time reached by the dynamic stages before this checkpoint.
+    #[serde(default)]
+    pub(super) physical_time: f64,
+    /// The stages integrated in time before this checkpoint.
+    #[serde(default)]
+    pub(super) events: Vec<crate::record::EventSummary>,
 }
 
 /// The committed loads at the start of a stage, from which its steps interpolate.

@@ -333,7 +333,10 @@ impl Driver<'_> {
         if sub.contact.is_some() {
             self.cstate = sub.contact.clone();
         }
-        self.last_u = Some(time.u.clone());
+        // A contact state's field is recovered from it, as after a quasi-static step.
+        if self.cstate.is_none() {
+            self.last_u = Some(time.u.clone());
+        }
         self.newton_total += sub.iterations;
         self.t_solve += sub.wall;
         time

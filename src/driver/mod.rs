@@ -100,7 +100,9 @@ pub fn simulate_with(
         let go_on = match &stage.dynamic {
             Some(spec) => d.run_dynamic_stage(si, spec, on_step)?,
             None => {
-                d.motion = None;
+                // After a dynamic stage the state balances inertia too: the stage's first
+                // step solves for equilibrium even where its loads do not change.
+                d.after_motion = d.motion.take().is_some();
                 d.run_stage(si, stage, on_step, resume.take().map(|r| r.1))?
             }
         };

@@ -83,6 +83,9 @@ pub(super) struct Driver<'a> {
     pub(super) motion: Option<crate::dynamics::TimeState>,
     /// Physical time reached by the dynamic stages so far.
     pub(super) physical_time: f64,
+    /// The stage about to begin follows a dynamic stage (it is no hold: see
+    /// [`Driver::begin_stage`]).
+    pub(super) after_motion: bool,
     pub(super) events: Vec<crate::record::EventSummary>,
 }
 /// A stage being stepped: its fixed figures, where its load stands, and the counters of its
@@ -196,6 +199,7 @@ impl<'a> Driver<'a> {
             integrators: Vec::new(),
             motion: None,
             physical_time: 0.0,
+            after_motion: false,
             events: Vec::new(),
         }
     }
@@ -330,7 +334,7 @@ impl Driver<'_> {
             budget: step_budget(stage.steps),
             first_step: self.records.len(),
             taken_before: self.records.iter().filter(|r| r.stage == si).count(),
-            hold: start.is_hold(target, stage.traction_scale),
+            hold: start.is_hold(target, stage.traction_scale) && !self.after_motion,
         }
     }
 
@@ -505,6 +509,8 @@ impl Driver<'_> {
             last_u: self.last_u.clone(),
             t_solve: self.t_solve,
             t_contact: self.t_contact,
+            physical_time: self.physical_time,
+            events: self.events.clone(),
         }
     }
 
@@ -629,6 +635,8 @@ impl Driver<'_> {
         self.last_u = c.last_u;
         self.t_solve = c.t_solve;
         self.t_contact = c.t_contact;
+        self.physical_time = c.physical_time;
+        self.events = c.events;
         (c.stage, (c.start, c.alpha, c.dalpha, c.older))
     }
 

@@ -55,7 +55,9 @@ impl Integrator {
         let c = scheme.mass_shift(dt);
         let shift: Vec<f64> = density.iter().map(|r| c * r).collect();
         let mut timings = crate::model::Timings::default();
-        let mut model = Model::shifted(case, base.mesh.clone(), &shift, &mut timings)?;
+        // The quasi-static model's grounding springs: a contact state means the same in both.
+        let springs: Vec<f64> = base.condensed.grounding.iter().map(|g| g.1).collect();
+        let mut model = Model::shifted(case, base.mesh.clone(), &shift, &springs, &mut timings)?;
         if let (Some(cm), Some(b)) = (model.contact.as_mut(), base.contact.as_ref()) {
             cm.system.floating_pilot = b.system.floating_pilot;
         }

@@ -214,16 +214,18 @@ impl Model {
 
     /// The model of an implicit time step on an already read mesh: its factorised matrix is
     /// `K + c M` ([`crate::assembly::assemble_shifted`]), with `shift[b] = c ρ_b` for each
-    /// body `b` of the case, and its prescribed-value forces those of `K + c M`. Everything
-    /// else (DOFs, contact pair, loads) is that of [`Model::from_mesh`]. Built without the
-    /// model cache.
+    /// body `b` of the case, and its prescribed-value forces those of `K + c M`; its grounding
+    /// springs are `springs` (those of the quasi-static model, [`Condensed::grounding`], so
+    /// that a contact state means the same in both). Everything else (DOFs, contact pair,
+    /// loads) is that of [`Model::from_mesh`]. Built without the model cache.
     pub fn shifted(
         case: &Case,
         mesh: Mesh,
         shift: &[f64],
+        springs: &[f64],
         timings: &mut Timings,
     ) -> Result<Model, ModelError> {
-        Self::build_on(case, mesh, None, timings, None, Some(shift))
+        Self::build_on(case, mesh, None, timings, None, Some((shift, springs)))
     }
 
     /// [`Model::from_mesh`] with the model cache and the bytes of the mesh file, if any: the
@@ -236,7 +238,7 @@ impl Model {
         cache: Option<(&crate::cache::Store, &[u8])>,
         timings: &mut Timings,
         gap: Option<f64>,
-        shift: Option<&[f64]>,
+        shift: Option<(&[f64], &[f64])>,
     ) -> Result<Model, ModelError> {
         // faer's dense kernels (the contact Newton's block factorisations, solves and products)
         // run sequentially: in parallel, some split their sums by the number of threads, and a
@@ -247,8 +249,9 @@ impl Model {
         faer::set_global_parallelism(faer::Par::Seq);
         let mut parts = bodies::prepare(case, &mesh, gap)?;
         timings.pair = parts.t_pair;
+        let springs = shift.map(|s| s.1);
         let shift: Option<Vec<f64>> =
-            shift.map(|s| parts.elem_body.iter().map(|&b| s[b]).collect());
+            shift.map(|s| parts.elem_body.iter().map(|&b| s.0[b]).collect());
 
         // The model cache: the linear algebra of an earlier build of the same model, if any.
         let (sizes, lookup) = look_up(case, cache, &parts, timings);
@@ -260,7 +263,13 @@ impl Model {
                     (cached::Lookup::Miss(p), Some((store, _))) => Some((store, p)),
                     _ => None,
                 };
-                assembled(&mesh, &mut parts, shift.as_deref(), miss, timings)?
+                assembled(
+                    &mesh,
+                    &mut parts,
+                    (shift.as_deref(), springs),
+                    miss,
+                    timings,
+                )?
             }
         };
         crate::trace::mark("factorised");
@@ -480,7 +489,7 @@ fn restored(r: cached::Restored, parts: &mut Prepared, timings: &mut Timings) ->
 fn assembled(
     mesh: &Mesh,
     parts: &mut Prepared,
-    shift: Option<&[f64]>,
+    (shift, springs): (Option<&[f64]>, Option<&[f64]>),
     miss: Option<(&crate::cache::Store, cached::Pending)>,
     timings: &mut Timings,
 ) -> Result<LinearAlgebra, ModelError> {
@@ -538,7 +547,7 @@ fn assembled(
     let (condensed, contact, ordering, draft) = factorise(
         &mut k,
         &parts.dofs,
-        &parts.grounded,
+        (&parts.grounded, springs),
         pair,
         parts.e_star,
         (symbolic?, row_order),
@@ -620,7 +629,7 @@ type Factorised = (
 fn factorise(
     k: &mut UpperCsc,
     dofs: &DofMap,
-    grounded: &[usize],
+    (grounded, springs): (&[usize], Option<&[f64]>),
     pair: Option<(crate::contact::Pair, crate::contact::ConstraintRows)>,
     e_star: Option<f64>,
     (analysis, row_order): (Analysis, Option<Vec<usize>>),
@@ -631,7 +640,7 @@ fn factorise(
     let t = Instant::now();
     match (pair, analysis) {
         (None, Analysis::Partial(symbolic)) => {
-            let condensed = Condensed::build(k, n_i, grounded, &symbolic)?;
+            let condensed = Condensed::build_with_springs(k, n_i, grounded, springs, &symbolic)?;
             // The values are in the factor now; the pattern stays for the model cache.
             k.values = Vec::new();
             timings.factorise = t.elapsed().as_secs_f64();
@@ -649,7 +658,8 @@ fn factorise(
                 ),
                 None => (None, None),
             };
-            let condensed = Condensed::build_saddle(k, n_i, grounded, &y_free, &symbolic, dest)?;
+            let condensed =
+                Condensed::build_saddle(k, n_i, (grounded, springs), &y_free, &symbolic, dest)?;
             timings.factorise = t.elapsed().as_secs_f64();
             timings.constraint_block = condensed.constraint_block_s();
             // The stiffness is in the factor now, and a contact model's cache entry does not

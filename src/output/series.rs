@@ -308,6 +308,12 @@ impl<'a> Series<'a> {
         self
     }
 
+    /// Goes on with the `<stem>_time.pvd` entries of an earlier run (a restart).
+    pub fn with_time_entries(mut self, entries: Vec<PvdEntry>) -> Self {
+        self.time_entries = entries;
+        self
+    }
+
     /// The `.pvd` entries written so far.
     pub fn entries(&self) -> &[PvdEntry] {
         &self.entries
@@ -407,6 +413,8 @@ impl<'a> Series<'a> {
                 })
                 .collect();
             self.time_entries.extend(this_step);
+        }
+        if !self.time_entries.is_empty() {
             files.push((
                 dir.join(format!("{stem}_time.pvd")),
                 pvd(&self.time_entries).into_bytes(),

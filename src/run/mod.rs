@@ -391,7 +391,7 @@ fn begin_output<'a>(
         None
     };
     if let Some(s) = resume {
-        series = series.with_entries(s.pvd);
+        series = series.with_entries(s.pvd).with_time_entries(s.time_pvd);
         if let Some(saved) = s.energy {
             energy = Some(EnergyMeter::resume(model, saved, &s.checkpoint));
         }

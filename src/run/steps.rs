@@ -100,6 +100,7 @@ impl StepSink<'_> {
                     checkpoint: c.clone(),
                     steps: ev.step,
                     pvd: Vec::new(),
+                    time_pvd: Vec::new(),
                     journal: String::new(),
                     energy: self.energy.as_ref().map(EnergyMeter::saved),
                 })
