@@ -64,15 +64,16 @@ fn complete_files(out: &Path) -> usize {
     last_state
 }
 
-/// `history.csv` without wall times.
-fn answers(out: &Path) -> Vec<Vec<f64>> {
+/// `history.csv` without wall times, each value as text (a column that does not apply holds
+/// `NaN`, which a comparison of numbers would call different from itself).
+fn answers(out: &Path) -> Vec<Vec<String>> {
     let t = Table::read(&out.join("history.csv"));
     let wall = t.col("wall_s");
     t.rows
         .into_iter()
         .map(|mut r| {
             r.remove(wall);
-            r
+            r.iter().map(|v| format!("{v:e}")).collect()
         })
         .collect()
 }
