@@ -532,3 +532,38 @@ fn a_time_step_too_coarse_for_the_fronts_is_warned_of_with_the_numbers() {
     r.assert_ok("fine Δt");
     assert!(!r.stderr.contains("c_s Δt / h"), "{}", r.stderr);
 }
+
+/// `until: "rest"`: a released strip whose vibration the scheme damps (ρ∞ = 0 with steps far
+/// longer than its periods) comes to rest, the stage ends there, and the next quasi-static
+/// stage goes on from that state.
+#[test]
+fn a_stage_that_comes_to_rest_ends_and_the_next_goes_on() {
+    let dir = strip("rest", 2);
+    let json = format!(
+        r#"{{"mesh": "strip.msh",
+          "bodies": [{{"group": "body", "E": {E}, "nu": {NU}, "density": {RHO}}}],
+          "supports": [{{"group": "bottom", "uy": 0}}, {{"group": "top", "uy": 0}},
+                       {{"group": "right", "ux": 0, "uy": 0}}],
+          "tractions": [{{"group": "left", "kind": "uniform", "tx": -1.0}}],
+          "stages": [{{"name": "stretch", "steps": 1, "traction_scale": 1.0}},
+                     {{"name": "release", "traction_scale": 0.0,
+                       "dynamic": {{"dt": 50.0, "duration": 5000.0, "ramp": 0, "rho_inf": 0.0,
+                                    "until": "rest", "rest_window": 5}}}},
+                     {{"name": "stretch again", "steps": 2, "traction_scale": 0.5}}],
+          "output": {{"vtu": false, "energy": true}}}}"#
+    );
+    let r = run_case_in(&dir, "case.json", &json, &["--quiet", "--no-cache"]);
+    r.assert_ok("rest");
+    let s = r.summary();
+    let e = &s["events"][0];
+    assert_eq!(e["end"], serde_json::json!("rest"), "{e}");
+    let steps = e["steps"].as_u64().unwrap();
+    assert!(steps < 100, "{steps} steps: the stage did not end at rest");
+    let h = r.history();
+    let stage = h.col("stage");
+    assert_eq!(h.rows.last().unwrap()[stage], 2.0);
+    // The last stage is quasi-static: at rest, half the stretch.
+    assert_eq!(h.last("kinetic"), 0.0);
+    let u_end = h.last("t");
+    assert!(u_end > 0.0 && u_end < 5000.0, "{u_end}");
+}
