@@ -162,7 +162,10 @@ impl Drop for Tmpfs {
 fn a_full_disk_stops_the_run_with_whole_files_and_a_resumable_state() {
     let (dir, case, whole) = setup("faults-full");
     let disk = dir.join("disk");
-    let fs = Tmpfs::mount(&disk, 40);
+    // Room for the files a run has in flight at once (a batch of four steps of 4 MB and the
+    // next batch begun ahead, ≈ 32 MB: with 40 MB a loaded machine could fill the disk before
+    // the first step was whole), and well short of the run's 84 MB.
+    let fs = Tmpfs::mount(&disk, 56);
     let out = disk.join("out");
     let (code, err) = run(&case, &out, &["--quiet"]);
     println!("{err}");
