@@ -196,6 +196,19 @@ fn s_wave_arrives_at_x_over_c_s_within_one_percent_converging_in_h_and_dt() {
     );
 }
 
+/// The strip's case: held in y on its long sides and at its far end, stretched in one
+/// quasi-static step by a traction on its left end, then the stages `after` (JSON text).
+fn stretched_strip(after: &str) -> String {
+    format!(
+        r#"{{"mesh": "strip.msh",
+          "bodies": [{{"group": "body", "E": {E}, "nu": {NU}, "density": {RHO}}}],
+          "supports": [{{"group": "bottom", "uy": 0}}, {{"group": "top", "uy": 0}},
+                       {{"group": "right", "ux": 0, "uy": 0}}],
+          "tractions": [{{"group": "left", "kind": "uniform", "tx": -1.0}}],
+          "stages": [{{"name": "stretch", "steps": 1, "traction_scale": 1.0}}, {after}]}}"#
+    )
+}
+
 /// The strip stretched quasi-statically, then released: a free vibration with no external
 /// work after the release step.
 fn released(
@@ -206,17 +219,11 @@ fn released(
     let (l, m) = lame();
     let c_p = ((l + 2.0 * m) / RHO).sqrt();
     let dt = 0.5 * 0.5 / c_p;
-    let json = format!(
-        r#"{{"mesh": "strip.msh",
-          "bodies": [{{"group": "body", "E": {E}, "nu": {NU}, "density": {RHO}}}],
-          "supports": [{{"group": "bottom", "uy": 0}}, {{"group": "top", "uy": 0}},
-                       {{"group": "right", "ux": 0, "uy": 0}}],
-          "tractions": [{{"group": "left", "kind": "uniform", "tx": -1.0}}],
-          "stages": [{{"name": "stretch", "steps": 1, "traction_scale": 1.0}},
-                     {{"name": "free", "traction_scale": 0.0,
-                       "dynamic": {{"dt": {dt}, "duration": {}, "ramp": 0, "rho_inf": {rho_inf}}}}}]}}"#,
+    let json = stretched_strip(&format!(
+        r#"{{"name": "free", "traction_scale": 0.0,
+             "dynamic": {{"dt": {dt}, "duration": {}, "ramp": 0, "rho_inf": {rho_inf}}}}}"#,
         dt * steps as f64
-    );
+    ));
     std::fs::write(dir.join("case.json"), &json).unwrap();
     let case: Case = serde_json::from_str(&json).unwrap();
     case.validate("case.json").unwrap();
@@ -539,19 +546,15 @@ fn a_time_step_too_coarse_for_the_fronts_is_warned_of_with_the_numbers() {
 #[test]
 fn a_stage_that_comes_to_rest_ends_and_the_next_goes_on() {
     let dir = strip("rest", 2);
-    let json = format!(
-        r#"{{"mesh": "strip.msh",
-          "bodies": [{{"group": "body", "E": {E}, "nu": {NU}, "density": {RHO}}}],
-          "supports": [{{"group": "bottom", "uy": 0}}, {{"group": "top", "uy": 0}},
-                       {{"group": "right", "ux": 0, "uy": 0}}],
-          "tractions": [{{"group": "left", "kind": "uniform", "tx": -1.0}}],
-          "stages": [{{"name": "stretch", "steps": 1, "traction_scale": 1.0}},
-                     {{"name": "release", "traction_scale": 0.0,
-                       "dynamic": {{"dt": 50.0, "duration": 5000.0, "ramp": 0, "rho_inf": 0.0,
-                                    "until": "rest", "rest_window": 5}}}},
-                     {{"name": "stretch again", "steps": 2, "traction_scale": 0.5}}],
-          "output": {{"vtu": false, "energy": true}}}}"#
-    );
+    let mut json: serde_json::Value = serde_json::from_str(&stretched_strip(
+        r#"{"name": "release", "traction_scale": 0.0,
+            "dynamic": {"dt": 50.0, "duration": 5000.0, "ramp": 0, "rho_inf": 0.0,
+                        "until": "rest", "rest_window": 5}},
+           {"name": "stretch again", "steps": 2, "traction_scale": 0.5}"#,
+    ))
+    .unwrap();
+    json["output"] = serde_json::json!({"vtu": false, "energy": true});
+    let json = json.to_string();
     let r = run_case_in(&dir, "case.json", &json, &["--quiet", "--no-cache"]);
     r.assert_ok("rest");
     let s = r.summary();
@@ -566,4 +569,45 @@ fn a_stage_that_comes_to_rest_ends_and_the_next_goes_on() {
     assert_eq!(h.last("kinetic"), 0.0);
     let u_end = h.last("t");
     assert!(u_end > 0.0 && u_end < 5000.0, "{u_end}");
+}
+
+/// A time step whose contact Newton does not converge is taken as two of half the size:
+/// Fig. 2's law on L2 past Q_max with a time step of 5e-6 s (c_s Δt / h ≈ 10, steel-like
+/// density): a few steps are halved, once and twice, and the event still ends in gross sliding.
+#[test]
+fn a_time_step_that_fails_is_taken_in_halves() {
+    let mut v = fig2_with(serde_json::json!({"name": "t", "steps": 40, "pilot_x": {"force": 1.2}}));
+    for b in v["bodies"].as_array_mut().unwrap() {
+        b["density"] = serde_json::json!(7.85e-9);
+    }
+    v["on_lost_equilibrium"] = serde_json::json!({"dynamic": {"dt": 5e-6, "duration": 2e-3,
+        "rho_inf": 0.9, "until": "rest"}});
+    let r = run_case("halved", &v, &["--no-cache"]);
+    assert_eq!(r.code, 5, "{}", r.stderr);
+    assert!(r.stderr.contains("two steps of Δt/2"), "{}", r.stderr);
+    assert_eq!(
+        r.summary()["events"][0]["end"],
+        serde_json::json!("sliding")
+    );
+    let h = r.history();
+    let (t, halvings) = (h.col("t"), h.col("cutbacks"));
+    let halved: Vec<&Vec<f64>> = h
+        .rows
+        .iter()
+        .filter(|x| x[t] > 0.0 && x[halvings] > 0.0)
+        .collect();
+    eprintln!("{} time steps halved", halved.len());
+    assert!(!halved.is_empty());
+    // A halved step ends between two of the stage's steps: at a quarter or three quarters of
+    // Δt (twice halved), or at its middle.
+    for row in &halved {
+        let k = row[t] / 5e-6;
+        let frac = k - k.floor();
+        assert!(
+            [0.25, 0.5, 0.75].iter().any(|f| (frac - f).abs() < 1e-6)
+                || !(1e-6..=1.0 - 1e-6).contains(&frac),
+            "t = {}",
+            row[t]
+        );
+    }
 }

@@ -125,6 +125,16 @@ struct StageRun {
 }
 
 impl StageRun {
+    /// Goes on from the load fraction `a` reached otherwise (an event that came to rest):
+    /// a nominal increment, no predictor, no failed attempts.
+    fn resume_at(&mut self, a: f64) {
+        self.alpha = a;
+        self.dalpha = self.nominal;
+        self.k_next = next_nominal(a, self.steps);
+        self.older = None;
+        (self.attempts, self.probed, self.cutbacks) = (0, false, 0);
+    }
+
     /// The load fraction of the next attempt: `α + Δα`, the next nominal fraction when that
     /// is within `Δα_min / 2` of it, or a probe's load.
     fn next_alpha(&mut self) -> f64 {
@@ -280,13 +290,12 @@ impl Driver<'_> {
                     if self.cut_back(&mut s, step, e, &aim) {
                         continue;
                     }
+                    let before = self.records.len();
                     if self.event_after_lost(si, aim.alpha, (aim.scale, aim.control), on_step)? {
-                        // Re-stuck: the stage goes on from the load held.
-                        s.alpha = aim.alpha;
-                        s.dalpha = s.nominal;
-                        s.k_next = next_nominal(s.alpha, s.steps);
-                        s.older = None;
-                        (s.attempts, s.probed, s.cutbacks) = (0, false, 0);
+                        // Re-stuck: the stage goes on from the load held; its time steps do
+                        // not count in the stage's step budget.
+                        s.first_step += self.records.len() - before;
+                        s.resume_at(aim.alpha);
                         continue;
                     }
                     return Ok(false);
@@ -552,7 +561,7 @@ impl Driver<'_> {
                 .as_ref()
                 .filter(|(a0, _)| *a0 >= 0.0)
                 .map(|(a_old, old)| (old, (a_new - alpha) / (alpha - a_old).max(1e-300)));
-            let guess = t.map(|(old, t)| predict(prev, old, t));
+            let guess = t.map(|(old, t)| solver::predicted_state(prev, old, t));
             self.lu_cache.predict_with(t.map(|(_, t)| t));
             self.model.solve_contact_step(
                 StepLoad {
@@ -683,17 +692,4 @@ impl Driver<'_> {
             kinetic: None,
         });
     }
-}
-
-/// The predicted forces of the next step: the last two states extrapolated by `t` (the ratio
-/// of the next increment to the last), normal forces kept non-negative.
-fn predict(prev: &State, old: &State, t: f64) -> State {
-    let mut g = prev.clone();
-    g.status = solver::predict_slip(prev, old, t);
-    [g.f_n, g.f_t, g.z] = solver::predicted_forces(
-        [&prev.f_n, &prev.f_t, &prev.z],
-        [&old.f_n, &old.f_t, &old.z],
-        t,
-    );
-    g
 }

@@ -412,6 +412,19 @@ fn dot_lanes(c: &[&[f64]; LANES], x: &[f64]) -> [f64; LANES] {
     acc
 }
 
+/// The predicted forces of the next step: the last two states extrapolated by `t` (the ratio
+/// of the next increment to the last), normal forces kept non-negative.
+pub fn predicted_state(prev: &State, old: &State, t: f64) -> State {
+    let mut g = prev.clone();
+    g.status = predict_slip(prev, old, t);
+    [g.f_n, g.f_t, g.z] = predicted_forces(
+        [&prev.f_n, &prev.f_t, &prev.z],
+        [&old.f_n, &old.f_t, &old.z],
+        t,
+    );
+    g
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
