@@ -245,15 +245,6 @@ pub fn run_model(
             // The steps still waiting for the writer: this thread prepares them from the last
             // while the writer finishes those it has; then the summary and its checks.
             let equilibrium = check_last_step(&model, &mut sim, sink.last_u, &mut writer);
-            // Every field is recovered, or its recovery has started (the writer took the steps
-            // left): the factor's values are freed once those end, on a thread of their own, while
-            // the output and the summary are finished (hundreds of MB, which would otherwise be
-            // freed after them: 10 ms on L5, 45 ms on L7).
-            if sim.last_u.is_some()
-                && let Some(values) = model.condensed.chol.release()
-            {
-                scope.spawn(move || free_when_unshared(values));
-            }
             crate::trace::mark("simulated");
             let solve_s = sim.solve_s;
             let bracket_attempts = sim.bracket_attempts;
@@ -262,6 +253,12 @@ pub fn run_model(
             crate::trace::mark("summarised");
             let (t_write, t_wait) = writer.finish()?;
             crate::trace::mark("writer done");
+            // Every field is recovered (the writer has finished: a solve it had still to begin
+            // would find the values gone): the factor's values are freed on a thread of their
+            // own while the history is written.
+            if let Some(values) = model.condensed.chol.release() {
+                scope.spawn(move || free_when_unshared(values));
+            }
             Ok((
                 summarised,
                 history,
