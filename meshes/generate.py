@@ -27,7 +27,7 @@ XS = 1.5 * A        # arcs are split at |x| = 1.5 a
 # job list: (output file, geo file, parser parameters, option overrides, description)
 # ---------------------------------------------------------------------------------------
 JOBS = []
-ON_DEMAND = {"vm272_L6.msh", "vm272_L7.msh"}
+ON_DEMAND = {"vm272_L6.msh", "vm272_L7.msh", "blocks_h05.msh"}
 for L in range(8):
     h_c = A / (3.2 * 2 ** L)
     JOBS.append((f"vm272_L{L}.msh", "vm272.geo", {"h_c": h_c},
@@ -51,6 +51,13 @@ JOBS.append(("block_hertz.msh", "block_hertz.geo", {}, {"Mesh.Binary": 1},
              {"h": A / 40, "note": "a/40 on top for abs(x) <= 1.2a, ~a/20 on x = 0 to depth 3.5a; nodes at x = -a, 0, a on top"}))
 JOBS.append(("patch_curved.msh", "patch_curved.geo", {}, {"Mesh.Binary": 0},
              {"h": 0.34, "note": "unit square, unstructured"}))
+# Rupture on a long planar interface (docs/dynamics.md): two blocks 1200 x 600 mm, h_i along
+# the interface over |x| <= 220 mm; h_i = 0.5 is made on demand (tests/rupture.rs).
+for tag, h_i in (("h2", 2.0), ("h1", 1.0), ("h05", 0.5)):
+    JOBS.append((f"blocks_{tag}.msh", "blocks.geo",
+                 {"L": 1200.0, "H": 600.0, "h_i": h_i, "x_f": 220.0, "k_grow": 0.2, "h_far": 50.0},
+                 {"Mesh.Binary": 1},
+                 {"h": h_i, "note": f"two blocks 1200 x 600 mm; h = {h_i:g} mm along the interface for abs(x) <= 220 mm"}))
 # Material-pair cases (docs/material_pairs.md): cylindrical pad R = 25 mm on a flat.
 JOBS.append(("pad_flat.msh", "pad_flat.geo", {"h_c": 0.001, "x_f": 0.16}, {"Mesh.Binary": 1},
              {"h": 0.001, "xs": 0.16, "note": "pad R = 25 mm on a flat; h_c = 1 um for abs(x) <= 0.16 mm"}))
@@ -85,6 +92,9 @@ EXPECTED_GROUPS = {
     "patch_curved": {(2, "body"), (1, "left"), (1, "right"), (1, "bottom"), (1, "top")},
     "pad_flat": {(2, "lower_body"), (2, "upper_body"), (1, "bottom"), (1, "top"),
                  (1, "lower_arc"), (1, "upper_arc")},
+    "blocks": {(2, "lower_block"), (2, "upper_block"), (1, "bottom"), (1, "top"),
+               (1, "lower_face"), (1, "upper_face"), (1, "lower_left"), (1, "lower_right"),
+               (1, "upper_left"), (1, "upper_right")},
 }
 # circles whose boundary-line nodes must lie on the circle: group -> (cx, cy, r)
 CIRCLES = {
@@ -93,11 +103,11 @@ CIRCLES = {
     "pad_flat": {"upper_arc": (0.0, 35.0, 25.0)},
 }
 # straight contact faces whose nodes must lie on a line y = const: group -> y
-FLATS = {"pad_flat": {"lower_arc": 10.0}}
+FLATS = {"pad_flat": {"lower_arc": 10.0}, "blocks": {"lower_face": 0.0, "upper_face": 0.0}}
 
 
 def family(out):
-    for f in ("vm272", "lame", "block_hertz", "patch_curved", "pad_flat"):
+    for f in ("vm272", "lame", "block_hertz", "patch_curved", "pad_flat", "blocks"):
         if out.startswith(f):
             return f
     raise ValueError(out)
@@ -174,10 +184,11 @@ def check(out, desc):
     if neg:
         errors.append(f"{neg} clockwise triangles")
 
-    # bodies share no node (vm272, pad_flat)
-    if fam in ("vm272", "pad_flat"):
-        lo = {v for r in conn["lower_body"] for v in r}
-        up = {v for r in conn["upper_body"] for v in r}
+    # bodies share no node (vm272, pad_flat, blocks)
+    if fam in ("vm272", "pad_flat", "blocks"):
+        lo_name, up_name = ("lower_block", "upper_block") if fam == "blocks" else ("lower_body", "upper_body")
+        lo = {v for r in conn[lo_name] for v in r}
+        up = {v for r in conn[up_name] for v in r}
         if lo & up:
             errors.append(f"bodies share {len(lo & up)} nodes")
 
@@ -337,7 +348,8 @@ All meshes are generated from the `.geo` sources in this directory by
 The script re-opens every written file and checks: physical names, element types
 (9 = 6-node triangle, 8 = 3-node line; 2/1 for the first-order file), no orphan nodes,
 counter-clockwise corner ordering of every triangle, mid-edge nodes of the arcs on the
-circle (|r - R| < 1e-9), the two VM272 bodies share no node, and for `lame_straight_*`
+circle (|r - R| < 1e-9), the straight contact faces on their line, the two bodies of
+the two-body meshes share no node, and for `lame_straight_*`
 all mid-edge nodes at chord midpoints. Output is deterministic (1 thread, fixed seed).
 
 Format: MSH 4.1 (binary where stated, little-endian, 8-byte size_t tags), except
@@ -371,6 +383,14 @@ contact faces are `upper_arc` and the straight top face of the flat, named `lowe
 the VM272 meshes so the cases look alike. Size h = min(2.5, h_c + 0.1 d), d = distance to the
 central pieces |x| <= x_f of the two contact faces. For these files "arc edges" counts the
 edges with |x| <= x_f (0.16 mm for `pad_flat.msh`, 0.016 mm for `pad_flat_lead.msh`).
+
+Two blocks (`blocks.geo`, the rupture case `cases/rupture_pmma.json`): identical rectangles
+1200 mm x 600 mm, `lower_block` below y = 0 (held on `bottom`) and `upper_block` above it
+(`top` at y = 600, the pilot), each with its own interface line (`lower_face`, `upper_face`)
+and lateral sides (`lower_left`, `lower_right`, `upper_left`, `upper_right`) for side
+tractions. Size h_i within a band of height h_i along the interface over |x| <= 220 mm,
+growing at 0.2 per unit distance to 50 mm. `blocks_h05.msh` (h_i = 0.5 mm, 8 MB) is made on
+demand only (`python3 meshes/generate.py blocks_h05`, as tests/rupture.rs does).
 
 | file | h_c or h (mm) | nodes | triangles | arc edges / chord range | size | format | notes |
 |---|---|---|---|---|---|---|---|

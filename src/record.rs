@@ -27,6 +27,20 @@ pub struct StepRecord {
     /// Kinetic energy `½ vᵀ M v` at the end of a step integrated in time.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kinetic: Option<f64>,
+    /// The fronts of weakening of a step integrated in time and their energy release rates.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fronts: Option<FrontFigures>,
+}
+
+/// The leftmost and rightmost fronts of weakening of a step integrated in time
+/// ([`crate::model::fronts::weakening_fronts`]): position, the energy release rate `G` measured
+/// by the dynamic J-integral ([`crate::dynamics::flux`]) and the fracture energy `Γ` of its
+/// process zone; `None` where there is no front or no value.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
+pub struct FrontFigures {
+    pub front: [Option<f64>; 2],
+    pub g: [Option<f64>; 2],
+    pub gamma: [Option<f64>; 2],
 }
 
 /// The friction law and the paper's scales of the run (eqs. Maugis, Maugis10, Lambda, s0).

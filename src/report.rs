@@ -343,7 +343,9 @@ pub fn friction_summary(
 /// `history.csv`: one row per converged step (integer columns printed as integers; a value
 /// that does not apply, such as K_II without a front, as `NaN`). `t` is the physical time
 /// (advanced by the steps integrated in time only) and `kinetic` the kinetic energy (zero in
-/// quasi-static steps).
+/// quasi-static steps). The fronts of weakening, their energy release rates and fracture
+/// energies (`front_*`, `g_*`, `gamma_*`, [`crate::record::FrontFigures`]) are given in the
+/// steps integrated in time.
 pub fn history_csv(records: &[StepRecord]) -> String {
     let na = |v: Option<f64>| v.unwrap_or(f64::NAN);
     // Quasi-static steps take no physical time and are at rest.
@@ -354,6 +356,7 @@ pub fn history_csv(records: &[StepRecord]) -> String {
             t = r.physical_time.unwrap_or(t);
             let p = r.pilot.unwrap_or_default();
             let c = r.contact.unwrap_or_default();
+            let f = r.fronts.unwrap_or_default();
             vec![
                 r.step as f64,
                 r.stage as f64,
@@ -386,6 +389,12 @@ pub fn history_csv(records: &[StepRecord]) -> String {
                 na(c.k2_left),
                 na(c.k2_right),
                 na(c.k2_paper),
+                na(f.front[0]),
+                na(f.front[1]),
+                na(f.g[0]),
+                na(f.g[1]),
+                na(f.gamma[0]),
+                na(f.gamma[1]),
             ]
         })
         .collect();
@@ -422,6 +431,12 @@ pub fn history_csv(records: &[StepRecord]) -> String {
             "k2_left",
             "k2_right",
             "k2_paper",
+            "front_left",
+            "front_right",
+            "g_left",
+            "g_right",
+            "gamma_left",
+            "gamma_right",
         ],
         &rows,
         &[

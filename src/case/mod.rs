@@ -9,10 +9,12 @@ use serde::{Deserialize, Serialize};
 
 mod dynamic;
 mod friction_spec;
+mod patches;
 mod stages;
 
 pub use dynamic::{DynamicSpec, MAX_TIME_STEPS, OnLostEquilibrium, RampShape, Until};
 pub use friction_spec::{FrictionKind, FrictionSpec, OLD_SPELLINGS};
+pub use patches::{SlipPatch, weaken};
 use stages::StageItem;
 pub(crate) use stages::deserialize_stages;
 use std::path::{Path, PathBuf};
@@ -225,6 +227,10 @@ pub struct Stage {
     /// Multiplier of the `tractions` at the end of the stage; absent = as before (0 at the start).
     #[serde(default)]
     pub traction_scale: Option<f64>,
+    /// Patches of the contact weakened at the start of the stage ([`SlipPatch`]), e.g. the
+    /// nucleation patch of a rupture.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub weaken: Vec<SlipPatch>,
     /// Integrate this stage in time ([`DynamicSpec`]); its `steps` are then the time steps
     /// (`⌈duration/dt⌉`, not given in the file).
     #[serde(default)]
@@ -511,6 +517,8 @@ impl Case {
             if let Some(v) = s.traction_scale {
                 finite(format!("stages[{i}].traction_scale"), v)?;
             }
+            let frictional = self.contact.as_ref().is_some_and(|c| c.friction.is_some());
+            patches::validate(path, i, &s.weaken, (frictional, s.dynamic.is_some()))?;
         }
         Ok(())
     }

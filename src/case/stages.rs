@@ -54,6 +54,8 @@ pub(super) struct RawStage {
     #[serde(default)]
     traction_scale: Option<f64>,
     #[serde(default)]
+    weaken: Vec<super::SlipPatch>,
+    #[serde(default)]
     dynamic: Option<super::DynamicSpec>,
     #[serde(default)]
     cycles: Option<CycleGroup>,
@@ -83,6 +85,7 @@ impl RawStage {
             pilot_x: self.pilot_x,
             pilot_y: self.pilot_y,
             traction_scale: self.traction_scale,
+            weaken: self.weaken,
             dynamic: self.dynamic,
         })
     }
@@ -93,6 +96,7 @@ impl RawStage {
             && self.pilot_x.is_none()
             && self.pilot_y.is_none()
             && self.traction_scale.is_none()
+            && self.weaken.is_empty()
             && self.dynamic.is_none()
     }
 }

@@ -130,6 +130,21 @@ impl Driver<'_> {
         Ok(end != EventEnd::Failed)
     }
 
+    /// Weakens what the growing patches of stage `si` have reached at time `tau` into the stage
+    /// (not in an event after a lost equilibrium, which holds its stage's load).
+    fn grow_patches(&mut self, si: usize, tau: f64, after_lost: bool) {
+        let growing = self.case.stages[si]
+            .weaken
+            .iter()
+            .filter(|p| p.speed.is_some());
+        if let (false, Some(st)) = (after_lost, self.cstate.as_mut()) {
+            // A patch that holds no node yet (it starts from its centre) weakens nothing.
+            let _ = self
+                .model
+                .weaken(growing.map(|p| (p.extent(tau), p.slip)), &mut st.slip_mu);
+        }
+    }
+
     /// The event after a lost equilibrium in stage `si`: the load `held` (the first without
     /// equilibrium, at the fraction `alpha` of the stage) integrated in time from the last
     /// converged state. Returns how it ended.
@@ -221,6 +236,7 @@ impl Driver<'_> {
         let f_d = self.law.as_ref().and_then(|l| l.f_dynamic().ok());
         for k in 1..=n_steps {
             let tau = k as f64 * dt;
+            self.grow_patches(si, tau, after_lost);
             let st = self.cstate.clone();
             let subs = match self.advance(scheme, 0, &now, st.as_ref(), tau - dt, load) {
                 Ok(s) => s,
@@ -358,6 +374,18 @@ impl Driver<'_> {
             .cstate
             .as_ref()
             .map(|st| model.contact_figures(st, self.law.as_ref()));
+        let density: Vec<f64> = self
+            .case
+            .bodies
+            .iter()
+            .map(|b| b.density.unwrap_or(0.0))
+            .collect();
+        let fronts = match (&self.cstate, &self.law) {
+            (Some(st), Some(law)) => Some(crate::dynamics::flux::front_figures(
+                model, &density, now, st, law,
+            )),
+            _ => None,
+        };
         self.records.push(StepRecord {
             step,
             stage: si,
@@ -371,6 +399,7 @@ impl Driver<'_> {
             cycle: self.case.stages[si].cycle,
             physical_time: Some(now.time),
             kinetic: Some(now.kinetic),
+            fronts,
         });
         on_step(&StepEvent {
             step,

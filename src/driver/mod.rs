@@ -97,6 +97,16 @@ pub fn simulate_with(
     let mut resume = restart.from.map(|c| d.restore(c));
     let first = resume.as_ref().map_or(0, |r| r.0);
     for (si, stage) in case.stages.iter().enumerate().skip(first) {
+        // A stage's whole patches weaken the contact as it starts (not when resumed within
+        // it); growing ones advance with its time steps.
+        if (si > first || resume.is_none())
+            && let Some(st) = d.cstate.as_mut()
+        {
+            let whole = stage.weaken.iter().filter(|p| p.speed.is_none());
+            model
+                .weaken(whole.map(|p| (p.x, p.slip)), &mut st.slip_mu)
+                .expect("run refuses a patch without a node");
+        }
         let go_on = match &stage.dynamic {
             Some(spec) => d.run_dynamic_stage(si, spec, on_step)?,
             None => {

@@ -690,6 +690,7 @@ impl Driver<'_> {
             cycle: self.case.stages[si].cycle,
             physical_time: None,
             kinetic: None,
+            fronts: None,
         });
     }
 }

@@ -36,6 +36,7 @@
 //! back: reported in `normal_work` and `dissipation` (`docs/dynamics.md` has the measured
 //! figures).
 
+pub mod flux;
 mod integrator;
 mod masses;
 

@@ -139,6 +139,79 @@ pub struct Face<'a> {
     pub h: &'a [f64],
 }
 
+/// A front of weakening on the contact line: a node in contact whose friction has weakened
+/// (`μ(slip) < f_s`) next to one in contact that has not. A rupture spreading from a weakened
+/// patch has one at each end, moving outwards; a stick zone shrinking under a tangential load
+/// has one at each of its ends, moving inwards.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WeakeningFront {
+    /// Midway between the outermost weakened node and the first unweakened one.
+    pub x: f64,
+    /// `+1` when the unweakened side lies at larger x (the front moves in +x), else `−1`.
+    pub dir: f64,
+    /// The length of its process zone: from the front back to the first node whose slip has
+    /// reached the law's process slip (to the end of the weakened run where none has).
+    pub process: f64,
+    /// The node spacing at the front.
+    pub spacing: f64,
+    /// The nodes of the process zone, `lo..=hi` in the sorted order.
+    pub nodes: (usize, usize),
+}
+
+/// The leftmost and the rightmost fronts of weakening of a contact line whose nodes lie at `x`
+/// (increasing), in contact where `on`, weakened where `weak`, with the slip μ sees `slip` and
+/// the law's process slip `process_slip`. A line with one front only gives it on the side it
+/// moves towards (`[front, None]` for a front moving in −x).
+pub fn weakening_fronts(
+    x: &[f64],
+    on: &[bool],
+    weak: &[bool],
+    slip: &[f64],
+    process_slip: f64,
+) -> [Option<WeakeningFront>; 2] {
+    let n = x.len();
+    let boundary = |k: usize| on[k] && on[k + 1] && weak[k] != weak[k + 1];
+    let front = |k: usize| {
+        let dir = if weak[k] { 1.0 } else { -1.0 };
+        let lead = if weak[k] { k } else { k + 1 };
+        // Walk back through the weakened run to where the slip reached the process slip.
+        let mut end = lead;
+        while slip[end] < process_slip {
+            let next = if dir > 0.0 {
+                end.checked_sub(1)
+            } else {
+                Some(end + 1).filter(|&j| j < n)
+            };
+            match next {
+                Some(j) if weak[j] && on[j] => end = j,
+                _ => break,
+            }
+        }
+        let xf = 0.5 * (x[k] + x[k + 1]);
+        WeakeningFront {
+            x: xf,
+            dir,
+            process: (xf - x[end]).abs(),
+            spacing: x[k + 1] - x[k],
+            nodes: (lead.min(end), lead.max(end)),
+        }
+    };
+    let first = (0..n.saturating_sub(1)).find(|&k| boundary(k));
+    let last = (0..n.saturating_sub(1)).rfind(|&k| boundary(k));
+    match (first, last) {
+        (Some(a), Some(b)) if a != b => [Some(front(a)), Some(front(b))],
+        (Some(a), _) => {
+            let f = front(a);
+            if f.dir < 0.0 {
+                [Some(f), None]
+            } else {
+                [None, Some(f)]
+            }
+        }
+        _ => [None, None],
+    }
+}
+
 /// The slip at which the process zone of `law` ends: `2Δ`, with `Δ = (W/p)/(f_s − f_d)`
 /// (eq. Maugis10) — the slip over which a linear ramp of the same `f_s`, `f_d` and `W` weakens
 /// to `f_d`. A ramp and a step reach `f_d` by then (the process zone is the weakening zone); an
@@ -276,4 +349,42 @@ fn solve3(mut a: [[f64; 3]; 3], mut r: [f64; 3]) -> Option<[f64; 3]> {
         w[row] = (r[row] - s) / a[row][row];
     }
     Some(w)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_rupture_has_a_front_at_each_end_moving_out_and_a_stick_zone_one_at_each_end_moving_in() {
+        let x: Vec<f64> = (0..11).map(|k| k as f64).collect();
+        let on = vec![true; 11];
+        // A rupture over nodes 3..=7, fully weakened (slip ≥ 1) over 4..=6.
+        let slip = [0.0, 0.0, 0.0, 0.4, 1.0, 2.0, 1.0, 0.5, 0.0, 0.0, 0.0];
+        let weak: Vec<bool> = slip.iter().map(|&s| s > 0.0).collect();
+        let [l, r] = weakening_fronts(&x, &on, &weak, &slip, 1.0);
+        let (l, r) = (l.unwrap(), r.unwrap());
+        assert_eq!((l.x, l.dir, l.process, l.nodes), (2.5, -1.0, 1.5, (3, 4)));
+        assert_eq!((r.x, r.dir, r.process, r.nodes), (7.5, 1.0, 1.5, (6, 7)));
+        // A stick zone over 4..=6 between weakened runs: fronts moving inwards.
+        let weak: Vec<bool> = (0..11).map(|k| !(4..=6).contains(&k)).collect();
+        let slip: Vec<f64> = weak.iter().map(|&w| if w { 2.0 } else { 0.0 }).collect();
+        let [l, r] = weakening_fronts(&x, &on, &weak, &slip, 1.0);
+        assert_eq!((l.unwrap().x, l.unwrap().dir), (3.5, 1.0));
+        assert_eq!(
+            (r.unwrap().x, r.unwrap().dir, r.unwrap().process),
+            (6.5, -1.0, 0.5)
+        );
+        // Open nodes make no front; a single front is given on the side it moves towards.
+        let mut on = vec![true; 11];
+        on[0] = false;
+        let weak: Vec<bool> = (0..11).map(|k| k < 3).collect();
+        let [l, r] = weakening_fronts(&x, &on, &weak, &[1.0; 11], 1.0);
+        assert!(l.is_none());
+        assert_eq!(r.unwrap().x, 2.5);
+        assert_eq!(
+            weakening_fronts(&x, &on, &[false; 11], &[0.0; 11], 1.0),
+            [None, None]
+        );
+    }
 }

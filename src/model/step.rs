@@ -86,6 +86,29 @@ pub struct ElementForces {
 }
 
 impl Model {
+    /// Raises the slip μ sees of the slave nodes within each `(extent, slip)` of `patches`
+    /// ([`crate::case::weaken`]); `Err(i)` when patch `i` holds no slave node (the others are
+    /// applied). Without a contact nothing is held: `Err(0)` for a non-empty list.
+    pub fn weaken(
+        &self,
+        patches: impl IntoIterator<Item = ([f64; 2], f64)>,
+        slip_mu: &mut [f64],
+    ) -> Result<(), usize> {
+        let mut patches = patches.into_iter().peekable();
+        if patches.peek().is_none() {
+            return Ok(());
+        }
+        let cm = self.contact.as_ref().ok_or(0usize)?;
+        let xs: Vec<f64> = cm
+            .pair
+            .mortar
+            .slave_nodes
+            .iter()
+            .map(|&n| self.mesh.nodes[n][0])
+            .collect();
+        crate::case::weaken(&xs, patches, slip_mu)
+    }
+
     /// From now on the simulations of this model share their factorised Delassus blocks (see
     /// [`crate::contact::solver::BlockStore`]): for a sweep, whose rows run side by side.
     pub fn share_contact_blocks(&self) {

@@ -98,6 +98,7 @@ pub fn run(case_path: &Path, opts: &RunOptions) -> Result<Summary, RunError> {
             if let Err(off) = &store {
                 model.cache = Some(off.clone());
             }
+            refuse_empty_patches(case, case_path, &model)?;
             if let Some(job) = id_job.take() {
                 id = job.join().expect("the run-id thread does not panic")?;
             }
@@ -441,4 +442,27 @@ fn free_when_unshared<T>(mut v: std::sync::Arc<T>) {
             }
         }
     }
+}
+
+/// A `stages[i].weaken` patch that holds no node of the slave face is refused, naming it.
+fn refuse_empty_patches(case: &Case, case_path: &Path, model: &Model) -> Result<(), RunError> {
+    let ns = model
+        .contact
+        .as_ref()
+        .map_or(0, |c| c.pair.mortar.slave_nodes.len());
+    for (i, stage) in case.stages.iter().enumerate() {
+        let whole = stage.weaken.iter().map(|p| (p.x, p.slip));
+        if let Err(k) = model.weaken(whole, &mut vec![0.0; ns]) {
+            let [x0, x1] = stage.weaken[k].x;
+            let slave = case.contact.as_ref().map_or("", |c| c.slave.as_str());
+            return Err(crate::case::CaseError::Value {
+                path: case_path.display().to_string(),
+                key: format!("stages[{i}].weaken[{k}].x"),
+                value: format!("[{x0}, {x1}]"),
+                why: format!("holds no node of the slave group `{slave}`"),
+            }
+            .into());
+        }
+    }
+    Ok(())
 }
