@@ -3,6 +3,7 @@
 //! binary on a case with its outputs read back.
 #![allow(dead_code)]
 
+pub mod rupture;
 pub mod vtu;
 
 use serde_json::{Value, json};
