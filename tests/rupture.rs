@@ -85,7 +85,7 @@ fn the_energy_release_rate_at_the_fronts_converges_to_the_fracture_energy() {
     }
     equation_of_motion(&runs[1]);
     validation_row(
-        "470",
+        "470-rupture-energy-release-rate",
         "Rupture fronts, PMMA-like blocks: G (dynamic J-integral) / Γ per speed band 0.1–0.9 c_R, worst band",
         "Γ = ½ (f_s − f_d) p D_c of the law",
         &format!(
@@ -134,7 +134,7 @@ fn equation_of_motion(t: &[Track; 2]) {
         rows.push(format!("{:.0} mm: {v:.2} vs {eom:.2}", x.ell));
     }
     validation_row(
-        "471",
+        "471-rupture-equation-of-motion",
         "Rupture fronts: speed against half-length ℓ, h = 1 mm",
         "Freund's equation of motion G_static(ℓ)(1 − v/c_R) = Γ (semi-infinite crack)",
         &format!("v/c_R measured vs equation: {}", rows.join("; ")),

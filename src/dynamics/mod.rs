@@ -6,6 +6,7 @@
 //! | this file | [`Scheme`]: the scheme's parameters from its spectral radius ρ∞ |
 //! | `masses` | [`Masses`]: the consistent mass of the model's elements, `M x` and `½ vᵀ M v` |
 //! | `integrator` | [`Integrator`]: one time step on the model of `K + c M` |
+//! | `flux` | the fronts of weakening of a time step and the energy release rate reaching each (dynamic J-integral) |
 //!
 //! **The equations.** With `u, v, a` the free DOFs' displacement, velocity and acceleration,
 //! `k(u)` the elastic forces, `T` the tractions and `r` the forces on the retained DOFs (the
