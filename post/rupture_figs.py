@@ -22,7 +22,7 @@ panels:
        from history.csv), averaged over the same 2K + 1 steps, against v/c_R, for the samples
        of a front running on its own (more than 4 mm ahead of the forced patch given by
        --forced V X_END: speed in mm/s and half-length in mm; default 67000 40, the shipped
-       case's).
+       case's) and within the fine interface mesh, ℓ ≤ --fine (default 200 mm).
 
 Inputs: RUNDIR/history.csv, RUNDIR/contact_NNNN.csv, RUNDIR/summary.json (the case path) and
 the case file (E, ν, density of the first body; the friction law; the mesh's interface
@@ -76,6 +76,7 @@ def main():
     ap.add_argument("--out")
     ap.add_argument("--forced", nargs=2, type=float, default=[67000.0, 40.0])
     ap.add_argument("--window", type=int, default=15)
+    ap.add_argument("--fine", type=float, default=200.0)
     a = ap.parse_args()
     run = a.rundir
     summary = json.load(open(os.path.join(run, "summary.json")))
@@ -117,8 +118,8 @@ def main():
         z = np.where(z > 1e-2, z, np.nan)
         im = ax[0].pcolormesh(np.array(times) * 1e6, xs, z, norm=LogNorm(vmin=1e-1), shading="nearest", cmap="viridis")
         fig.colorbar(im, ax=ax[0], label="slip rate (mm/s)")
-    ax[0].plot(t * 1e6, dyn["front_left"], "w-", lw=0.8)
-    ax[0].plot(t * 1e6, dyn["front_right"], "w-", lw=0.8, label="fronts (every step)")
+    ax[0].plot(t * 1e6, dyn["front_left"], "r-", lw=0.8)
+    ax[0].plot(t * 1e6, dyn["front_right"], "r-", lw=0.8, label="fronts of weakening (every step)")
     ax[0].set_xlabel("t (µs)")
     ax[0].set_ylabel("x (mm)")
     ax[0].set_ylim(-1.3 * np.nanmax(np.abs(dyn["front_right"])), 1.3 * np.nanmax(np.abs(dyn["front_right"])))
@@ -133,7 +134,7 @@ def main():
         ell = np.abs(dyn[f"front_{side}"])
         ratio = dyn[f"g_{side}"] / dyn[f"gamma_{side}"]
         s = samples(t, ell, ratio, k)
-        own = (s[:, 1] - np.minimum(vf * s[:, 0], xf) > 4.0) & np.isfinite(s[:, 3])
+        own = (s[:, 1] - np.minimum(vf * s[:, 0], xf) > 4.0) & (s[:, 1] <= a.fine) & np.isfinite(s[:, 3])
         ax[1].plot(s[:, 1], s[:, 2] / cr, mark, ms=2, label=f"{side} front")
         ax[2].plot(s[own, 2] / cr, s[own, 3], mark, ms=2, label=f"{side} front, running on its own")
         allv.append(s[own])
@@ -145,7 +146,10 @@ def main():
     ax[1].plot(ells, np.clip(1 - ratio_s, 0, None), "k-", label="Freund: G_static (1 − v/c_R) = Γ")
     ax[1].plot(ells, np.clip(1 - ratio_s**2, 0, None), "k--", label="G_static sqrt(1 − v/c_R) = Γ")
     ax[1].axhline(1.0, color="grey", lw=0.6)
+    ax[1].axvline(a.fine, color="grey", ls=":", lw=0.8)
+    ax[1].text(a.fine, 0.05, " end of the fine mesh", fontsize=8, color="grey")
     ax[1].set_xlabel("ℓ = |front| (mm)")
+    ax[1].set_xlim(0, 1.1 * a.fine)
     ax[1].set_ylabel("v / c_R")
     ax[1].set_ylim(0, 1.1)
     ax[1].set_title(f"(b) front speed (c_R = {cr / 1e3:.0f} m/s, c_s = {cs / 1e3:.0f} m/s)")
