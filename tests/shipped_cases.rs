@@ -463,13 +463,13 @@ fn answers_do_not_depend_on_the_output_settings() {
         ] {
             // Every one of the event's ~1 800 time steps as a `.vtu` is 2 GB of output at L3
             // (4 GB for the rupture): those cases' variant writes the contact tables of every
-            // 7th step instead (a cadence that is not the shipped one's either). Its variants keep its energy balance, which its summary
-            // reports.
+            // 7th step instead (a cadence that is not the shipped one's either). Their variants
+            // keep the energy balance, which their summaries report.
             let output = match (name.as_str(), output) {
                 ("fig2_event" | "rupture_pmma", Some(o)) if o["every"] == json!(1) => {
                     Some(json!({"every": 7, "vtu": false, "energy": true}))
                 }
-                ("fig2_event", Some(mut o)) => {
+                ("fig2_event" | "rupture_pmma", Some(mut o)) => {
                     o["energy"] = json!(true);
                     Some(o)
                 }
