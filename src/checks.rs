@@ -84,6 +84,59 @@ impl Check {
     }
 }
 
+/// Energy the time-stepping scheme may gain over a run, relative to the largest work or energy
+/// of the run's energy balance, before a warning ([`scheme_energy`]).
+pub const SCHEME_GAIN_LIMIT: f64 = 1e-3;
+
+/// The energy of the time-stepping scheme over a run's steps integrated in time, from the last
+/// row of its energy balance: the generalised-α scheme only dissipates (`numerical ≥ 0`), and
+/// contact conditions at the step's end keep it so; an energy gain (`numerical < 0`) beyond
+/// [`SCHEME_GAIN_LIMIT`] of the run's largest work or energy is warned of (a Δt too coarse for
+/// the contact's changes is the usual cause). Not applied to a run without time steps.
+pub fn scheme_energy(last: &crate::energy::EnergyRow, timed: bool) -> Check {
+    let scale = [
+        last.work_pilot.abs(),
+        last.work_tractions.abs(),
+        last.work_supports.abs(),
+        last.elastic.abs(),
+        last.kinetic.abs(),
+        last.dissipation.abs(),
+    ]
+    .into_iter()
+    .fold(0.0, f64::max);
+    if !timed || scale == 0.0 {
+        return Check {
+            level: Level::NotApplied,
+            ..Check::new(
+                "scheme_energy",
+                0.0,
+                SCHEME_GAIN_LIMIT,
+                Level::Warning,
+                "not applied: no step integrated in time".into(),
+            )
+        };
+    }
+    let gain = (-last.numerical).max(0.0) / scale;
+    let note = if gain > SCHEME_GAIN_LIMIT {
+        format!(
+            "the time-stepping scheme gained {:.3e} of energy (numerical dissipation {:.3e}) against the run's largest work or energy {scale:.3e}: the steps integrated in time do not keep the energy balance; try a smaller dt",
+            -last.numerical, last.numerical
+        )
+    } else {
+        format!(
+            "numerical dissipation {:.3e} over the steps integrated in time, against the run's largest work or energy {scale:.3e}",
+            last.numerical
+        )
+    };
+    Check::new(
+        "scheme_energy",
+        gain,
+        SCHEME_GAIN_LIMIT,
+        Level::Warning,
+        note,
+    )
+}
+
 /// Relative equilibrium residual above which the answer is rejected.
 pub const EQUILIBRIUM_LIMIT: f64 = 1e-6;
 /// The strain whose force is the smallest scale of the equilibrium check.
@@ -446,4 +499,26 @@ fn hertz_check(inp: &Input) -> Option<Check> {
             100.0 * dev
         ),
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_scheme_energy_warns_of_a_gain_and_not_of_a_loss() {
+        let row = |numerical: f64| crate::energy::EnergyRow {
+            work_pilot: 2.0,
+            elastic: 1.0,
+            dissipation: 0.5,
+            numerical,
+            ..Default::default()
+        };
+        assert_eq!(scheme_energy(&row(0.1), true).level, Level::Ok);
+        assert_eq!(scheme_energy(&row(-1e-3), true).level, Level::Ok);
+        let gain = scheme_energy(&row(-0.01), true);
+        assert_eq!(gain.level, Level::Warning);
+        assert!((gain.value - 0.005).abs() < 1e-15, "{}", gain.value);
+        assert_eq!(scheme_energy(&row(-0.01), false).level, Level::NotApplied);
+    }
 }

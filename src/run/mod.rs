@@ -279,6 +279,12 @@ pub fn run_model(
     if let Some(m) = &energy {
         write_file(&out_dir.join("energy.csv"), m.csv().as_bytes())?;
         summary.energy = m.summary();
+        // Runs that integrate in time: the scheme's energy (a warning if it gained any).
+        if let (Some(e), false) = (&summary.energy, summary.events.is_empty()) {
+            summary
+                .checks
+                .push(crate::checks::scheme_energy(&e.last, true));
+        }
     }
     summary.output_bytes = crate::report::output_bytes(out_dir, &stem);
     write_file(
