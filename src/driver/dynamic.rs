@@ -381,9 +381,18 @@ impl Driver<'_> {
             .map(|b| b.density.unwrap_or(0.0))
             .collect();
         let fronts = match (&self.cstate, &self.law) {
-            (Some(st), Some(law)) => Some(crate::dynamics::flux::front_figures(
-                model, &density, now, st, law,
-            )),
+            (Some(st), Some(law)) => {
+                let near = self
+                    .near_face
+                    .get_or_init(|| crate::dynamics::flux::near_face(model));
+                Some(crate::dynamics::flux::front_figures(
+                    model,
+                    (&density, near),
+                    now,
+                    st,
+                    law,
+                ))
+            }
             _ => None,
         };
         self.records.push(StepRecord {

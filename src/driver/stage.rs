@@ -87,6 +87,8 @@ pub(super) struct Driver<'a> {
     /// [`Driver::begin_stage`]).
     pub(super) after_motion: bool,
     pub(super) events: Vec<crate::record::EventSummary>,
+    /// The elements a front's J-integral can reach ([`crate::dynamics::flux::near_face`]).
+    pub(super) near_face: std::sync::OnceLock<Vec<usize>>,
 }
 /// A stage being stepped: its fixed figures, where its load stands, and the counters of its
 /// cutbacks and probes.
@@ -211,6 +213,7 @@ impl<'a> Driver<'a> {
             physical_time: 0.0,
             after_motion: false,
             events: Vec::new(),
+            near_face: std::sync::OnceLock::new(),
         }
     }
 

@@ -168,12 +168,13 @@ pub fn release_rate(
 }
 
 /// The fronts of weakening of a state integrated in time (`now`, contact state `st`, friction
-/// law `law`, bodies of density `density[b]`): their positions, energy release rates `G`
+/// law `law`, bodies of density `density[b]`, the elements `near` the slave face
+/// ([`near_face`])): their positions, energy release rates `G`
 /// ([`release_rate`]) and the fracture energies `Γ = (W/p) p̄` of their process zones (`p̄` the
 /// mean pressure on its nodes). No front without weakening.
 pub fn front_figures(
     model: &Model,
-    density: &[f64],
+    (density, near): (&[f64], &[usize]),
     now: &TimeState,
     st: &State,
     law: &FrictionLaw,
@@ -225,11 +226,43 @@ pub fn front_figures(
         let other = fronts[1 - side].map(|o| o.x);
         let y = pos(order[f.nodes.0])[1];
         if let Some(d) = domain_of(&f, y, ends, other) {
-            out.g[side] = bulk_fields(model, density, now, &d)
+            out.g[side] = bulk_fields(model, (density, near), now, &d)
                 .map(|els| release_rate(els, (&x, &v_hat, &tau_r), &d));
         }
     }
     out
+}
+
+/// The elements (indices into `model.elems`) that a front's domain can reach: those within half
+/// the slave face's extent of its bounding box. A domain fits between the face's ends
+/// ([`domain_of`]), so its radius is below half the face's extent along x.
+pub fn near_face(model: &Model) -> Vec<usize> {
+    let Some(cm) = &model.contact else {
+        return Vec::new();
+    };
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for &n in &cm.pair.mortar.slave_nodes {
+        for k in 0..2 {
+            lo[k] = lo[k].min(model.mesh.nodes[n][k]);
+            hi[k] = hi[k].max(model.mesh.nodes[n][k]);
+        }
+    }
+    let reach = 0.5 * (hi[0] - lo[0]);
+    let centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
+    let half = [0.5 * (hi[0] - lo[0]) + reach, 0.5 * (hi[1] - lo[1]) + reach];
+    (0..model.elems.len())
+        .filter(|&i| {
+            let xe = model.mesh.tri_coords(model.elems[i].0);
+            (0..2).all(|k| {
+                let (a, b) = xe
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                        (a.min(p[k]), b.max(p[k]))
+                    });
+                b >= centre[k] - half[k] && a <= centre[k] + half[k]
+            })
+        })
+        .collect()
 }
 
 /// The domain of front `f` on the contact line at height `y` with ends `ends` and the other
@@ -252,14 +285,15 @@ fn domain_of(f: &WeakeningFront, y: f64, ends: [f64; 2], other: Option<f64>) -> 
 /// (nearly incompressible) formulation, whose stress the integrand does not take.
 fn bulk_fields(
     model: &Model,
-    density: &[f64],
+    (density, near): (&[f64], &[usize]),
     now: &TimeState,
     d: &Domain,
 ) -> Option<Vec<ElementFields>> {
     let table = model.element_dof_table();
     let n_free = model.dofs.n_free();
     let mut out = Vec::new();
-    for (i, (e, mat)) in model.elems.iter().enumerate() {
+    for &i in near {
+        let (e, mat) = &model.elems[i];
         let xe = model.mesh.tri_coords(*e);
         if !d.touches(&xe) {
             continue;
