@@ -92,8 +92,8 @@ pub const SCHEME_GAIN_LIMIT: f64 = 1e-3;
 /// row of its energy balance: the generalised-α scheme only dissipates (`numerical ≥ 0`), and
 /// contact conditions at the step's end keep it so; an energy gain (`numerical < 0`) beyond
 /// [`SCHEME_GAIN_LIMIT`] of the run's largest work or energy is warned of (a Δt too coarse for
-/// the contact's changes is the usual cause). Not applied to a run without time steps.
-pub fn scheme_energy(last: &crate::energy::EnergyRow, timed: bool) -> Check {
+/// the contact's changes is the usual cause). For runs with steps integrated in time only.
+pub fn scheme_energy(last: &crate::energy::EnergyRow) -> Check {
     let scale = [
         last.work_pilot.abs(),
         last.work_tractions.abs(),
@@ -103,19 +103,8 @@ pub fn scheme_energy(last: &crate::energy::EnergyRow, timed: bool) -> Check {
         last.dissipation.abs(),
     ]
     .into_iter()
-    .fold(0.0, f64::max);
-    if !timed || scale == 0.0 {
-        return Check {
-            level: Level::NotApplied,
-            ..Check::new(
-                "scheme_energy",
-                0.0,
-                SCHEME_GAIN_LIMIT,
-                Level::Warning,
-                "not applied: no step integrated in time".into(),
-            )
-        };
-    }
+    .fold(0.0, f64::max)
+    .max(f64::MIN_POSITIVE);
     let gain = (-last.numerical).max(0.0) / scale;
     let note = if gain > SCHEME_GAIN_LIMIT {
         format!(
@@ -514,11 +503,10 @@ mod tests {
             numerical,
             ..Default::default()
         };
-        assert_eq!(scheme_energy(&row(0.1), true).level, Level::Ok);
-        assert_eq!(scheme_energy(&row(-1e-3), true).level, Level::Ok);
-        let gain = scheme_energy(&row(-0.01), true);
+        assert_eq!(scheme_energy(&row(0.1)).level, Level::Ok);
+        assert_eq!(scheme_energy(&row(-1e-3)).level, Level::Ok);
+        let gain = scheme_energy(&row(-0.01));
         assert_eq!(gain.level, Level::Warning);
         assert!((gain.value - 0.005).abs() < 1e-15, "{}", gain.value);
-        assert_eq!(scheme_energy(&row(-0.01), false).level, Level::NotApplied);
     }
 }

@@ -210,6 +210,33 @@ fn bad_patches_are_refused_before_anything_is_written() {
         assert!(run.stderr.contains(want), "{tag}: {}", run.stderr);
         assert!(!run.wrote_output(), "{tag}: output written");
     }
+    // A sweep's loads are stage lists of their own: their patches are checked the same way.
+    let case = shipped_case_on("rupture_pmma.json", "blocks_h2.msh");
+    let mut stages = case["stages"].clone();
+    stages[2]["weaken"] = json!([{"x": [5000.0, 6000.0], "slip": 0.002}]);
+    let dir = tempdir("rupture-bad-sweep");
+    std::fs::write(dir.join("case.json"), case.to_string()).unwrap();
+    std::fs::write(
+        dir.join("loads.json"),
+        json!({"stages": [stages]}).to_string(),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let (code, _, err) = stickslip(&[
+        "sweep",
+        dir.join("case.json").to_str().unwrap(),
+        dir.join("loads.json").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("loads.json: load 0")
+            && err.contains("`stages[2].weaken[0].x` = [5000, 6000]"),
+        "{err}"
+    );
+    assert!(!out.exists(), "sweep output written");
     // A growing patch needs time: a quasi-static stage refuses `speed`.
     let mut v = shipped_case_on("rupture_pmma.json", "blocks_h2.msh");
     v["stages"][1]["weaken"] = json!([{"x": [-1.0, 1.0], "slip": 0.002, "speed": 1.0}]);

@@ -131,13 +131,14 @@ impl Driver<'_> {
     }
 
     /// Weakens what the growing patches of stage `si` have reached at time `tau` into the stage
-    /// (not in an event after a lost equilibrium, which holds its stage's load).
-    fn grow_patches(&mut self, si: usize, tau: f64, after_lost: bool) {
+    /// (only a dynamic stage has growing patches; an event after a lost equilibrium runs in a
+    /// quasi-static stage, which has none).
+    fn grow_patches(&mut self, si: usize, tau: f64) {
         let growing = self.case.stages[si]
             .weaken
             .iter()
             .filter(|p| p.speed.is_some());
-        if let (false, Some(st)) = (after_lost, self.cstate.as_mut()) {
+        if let Some(st) = self.cstate.as_mut() {
             // A patch that holds no node yet (it starts from its centre) weakens nothing.
             let _ = self
                 .model
@@ -236,7 +237,7 @@ impl Driver<'_> {
         let f_d = self.law.as_ref().and_then(|l| l.f_dynamic().ok());
         for k in 1..=n_steps {
             let tau = k as f64 * dt;
-            self.grow_patches(si, tau, after_lost);
+            self.grow_patches(si, tau);
             let st = self.cstate.clone();
             let subs = match self.advance(scheme, 0, &now, st.as_ref(), tau - dt, load) {
                 Ok(s) => s,
@@ -374,12 +375,7 @@ impl Driver<'_> {
             .cstate
             .as_ref()
             .map(|st| model.contact_figures(st, self.law.as_ref()));
-        let density: Vec<f64> = self
-            .case
-            .bodies
-            .iter()
-            .map(|b| b.density.unwrap_or(0.0))
-            .collect();
+        let density = self.densities();
         let fronts = match (&self.cstate, &self.law) {
             (Some(st), Some(law)) => {
                 let near = self
@@ -444,13 +440,18 @@ impl Driver<'_> {
     }
 
     fn build_integrator(&self, scheme: Scheme, dt: f64) -> Result<Integrator, RunError> {
-        let density: Vec<f64> = self
-            .case
-            .bodies
+        Integrator::new(self.case, self.model, &self.densities(), scheme, dt)
+            .map_err(RunError::Model)
+    }
+
+    /// The density of each body of the case (every body has one where the case integrates in
+    /// time: checked with the case).
+    fn densities(&self) -> Vec<f64> {
+        let bodies = &self.case.bodies;
+        bodies
             .iter()
             .map(|b| b.density.expect("checked with the case"))
-            .collect();
-        Integrator::new(self.case, self.model, &density, scheme, dt).map_err(RunError::Model)
+            .collect()
     }
 
     /// One time step of the integrator at `level` (Δt / 2^level) from `now` (contact state

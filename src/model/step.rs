@@ -109,6 +109,34 @@ impl Model {
         crate::case::weaken(&xs, patches, slip_mu)
     }
 
+    /// Refuses a `stages[i].weaken` patch of `case` (read from `path`, as the error names it)
+    /// that holds no node of the slave face, naming it; called wherever a case's model is built
+    /// to be run.
+    pub fn refuse_empty_patches(
+        &self,
+        case: &crate::case::Case,
+        path: &str,
+    ) -> Result<(), crate::case::CaseError> {
+        let ns = self
+            .contact
+            .as_ref()
+            .map_or(0, |c| c.pair.mortar.slave_nodes.len());
+        for (i, stage) in case.stages.iter().enumerate() {
+            let whole = stage.weaken.iter().map(|p| (p.x, p.slip));
+            if let Err(k) = self.weaken(whole, &mut vec![0.0; ns]) {
+                let [x0, x1] = stage.weaken[k].x;
+                let slave = case.contact.as_ref().map_or("", |c| c.slave.as_str());
+                return Err(crate::case::CaseError::Value {
+                    path: path.to_string(),
+                    key: format!("stages[{i}].weaken[{k}].x"),
+                    value: format!("[{x0}, {x1}]"),
+                    why: format!("holds no node of the slave group `{slave}`"),
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// From now on the simulations of this model share their factorised Delassus blocks (see
     /// [`crate::contact::solver::BlockStore`]): for a sweep, whose rows run side by side.
     pub fn share_contact_blocks(&self) {

@@ -134,6 +134,16 @@ pub fn run(case_path: &Path, sweep_path: &Path, opts: &SweepOptions) -> Result<(
     let t = Instant::now();
     let store = crate::cache::Store::resolve(&opts.cache, !opts.quiet);
     let model = Model::build_cached(&case, case_path, None, store.as_ref().ok())?;
+    // Each load's weakened patches hold a node of the slave face (named as the grid names
+    // its loads).
+    for (i, c) in rows.loads.iter().enumerate() {
+        let at = if file.stages.is_empty() {
+            case_path.display().to_string()
+        } else {
+            format!("{}: load {i}", sweep_path.display())
+        };
+        model.refuse_empty_patches(c, &at)?;
+    }
     let e_star = model.contact.as_ref().map(|c| c.e_star).expect("contact");
     let mut laws = rows
         .laws
