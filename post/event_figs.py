@@ -193,7 +193,8 @@ def main():
     steps = h["step"][k].astype(int)
     t = h["t"][k] - h["t"][i0]
     tu = t * US
-    dt = np.diff(t[1:]).mean() if len(t) > 2 else t[-1]
+    # The smallest step: the stage's dt, which takes every change of the contact's state.
+    dt = np.diff(t[1:]).min() if len(t) > 2 else t[-1]
 
     ev = (summary.get("events") or [{}])
     ev = ev[args.event] if args.event < len(ev) else {}

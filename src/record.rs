@@ -116,9 +116,14 @@ pub struct EventSummary {
     /// Whether it followed a lost equilibrium (`on_lost_equilibrium`).
     pub after_lost_equilibrium: bool,
     pub rho_inf: f64,
+    /// The stage's time step `dt`, and the largest step it took (above `dt` only where the
+    /// stage adapts its step, `dt_max`).
     pub dt: f64,
+    #[serde(default)]
+    pub dt_largest: f64,
     pub t_start: f64,
     pub t_end: f64,
+    /// The time steps taken, at every size.
     pub steps: usize,
     pub newton_iterations: usize,
     pub peak_kinetic: f64,

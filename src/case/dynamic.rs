@@ -7,6 +7,9 @@ use serde::{Deserialize, Serialize};
 /// Most time steps of one dynamic stage.
 pub const MAX_TIME_STEPS: usize = 1_000_000;
 
+/// Most doublings of an adaptive stage's time step (`dt_max` ≤ `dt · 2^MAX_DOUBLINGS`).
+pub const MAX_DOUBLINGS: usize = 10;
+
 /// A stage integrated in time (generalised-α, [`crate::dynamics::Scheme`]): the pilot's
 /// targets and the traction scale are reached linearly at `ramp` and held to the end.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq, schemars::JsonSchema)]
@@ -15,6 +18,13 @@ pub struct DynamicSpec {
     /// Time step Δt (> 0). The stage takes `⌈duration/dt⌉` equal steps of
     /// `duration / ⌈duration/dt⌉`.
     pub dt: f64,
+    /// The largest time step of an adaptive stage (≥ `dt`). The step is `dt` times a power
+    /// of two: it doubles after steps that changed no contact node's state, up to the largest
+    /// `dt · 2^u` ≤ `dt_max`, and a step larger than `dt` that changes any contact node's
+    /// state is taken again as two of half its size, so each change is taken at `dt` (the
+    /// rules: `docs/dynamics.md`). Absent: every step is `dt`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt_max: Option<f64>,
     /// Physical duration of the stage (≥ dt).
     pub duration: f64,
     /// The scheme's spectral radius at infinite frequency ρ∞ ∈ [0, 1]: 1 dissipates nothing
@@ -94,6 +104,20 @@ impl DynamicSpec {
         (n, self.duration / n as f64)
     }
 
+    /// The doublings of the time step an adaptive stage may take: the largest `u` with
+    /// `dt · 2^u ≤ dt_max` (0 without `dt_max`).
+    pub fn doublings(&self) -> usize {
+        let (_, dt) = self.steps_and_dt();
+        let Some(max) = self.dt_max else {
+            return 0;
+        };
+        let mut u = 0;
+        while u < MAX_DOUBLINGS && dt * (1u64 << (u + 1)) as f64 <= max * (1.0 + 1e-9) {
+            u += 1;
+        }
+        u
+    }
+
     /// The ramp time (the duration when absent).
     pub fn ramp_time(&self) -> f64 {
         self.ramp.unwrap_or(self.duration)
@@ -122,6 +146,19 @@ pub(super) fn validate_spec(path: &str, key: &str, d: &DynamicSpec) -> Result<()
             "duration",
             format!("{}", d.duration),
             &format!("must be finite and at least `dt` = {}", d.dt),
+        ));
+    }
+    if let Some(m) = d.dt_max
+        && !(m.is_finite() && m >= d.dt && m <= d.dt * (1u64 << MAX_DOUBLINGS) as f64)
+    {
+        return Err(bad(
+            "dt_max",
+            format!("{m}"),
+            &format!(
+                "must be finite and between `dt` = {} and {} (`dt` · 2^{MAX_DOUBLINGS})",
+                d.dt,
+                d.dt * (1u64 << MAX_DOUBLINGS) as f64
+            ),
         ));
     }
     let (n, _) = d.steps_and_dt();

@@ -21,6 +21,9 @@
 use super::checkpoint::StageStart;
 use super::outcome::StepEvent;
 use super::stage::Driver;
+use super::timestep::{
+    EndWatch, Ladder, RATE_CHANGE, Sizer, finest, index_of, rate_change, state_changes,
+};
 use crate::case::{Control, DynamicSpec};
 use crate::contact::solver::{State, Status};
 use crate::dynamics::{Integrator, Scheme, TimeState};
@@ -35,61 +38,19 @@ type LoadAt<'a> = &'a dyn Fn(f64) -> (f64, [Control; 2]);
 pub const MAX_DT_HALVINGS: usize = 3;
 
 /// A time step taken (beside the motion it reached): its contact state, load, Newton
-/// iterations and the halvings of the stage's Δt it took.
+/// iterations, its size in doublings of the stage's Δt (negative: halvings), the contact
+/// nodes whose state it changed.
 struct Sub {
     contact: Option<State>,
     iterations: usize,
     scale: f64,
     control: [Control; 2],
-    halvings: usize,
+    doublings: isize,
+    /// No contact node changed its state and the slip rate changed by at most half of
+    /// [`RATE_CHANGE`]: a step of twice the size would be kept.
+    calm: bool,
     dt: f64,
     wall: f64,
-}
-
-/// The end criteria of `until: "rest"` ([`DynamicSpec`]), observed at the end of each of a
-/// stage's time steps.
-struct EndWatch {
-    rest: bool,
-    ratio: f64,
-    window: usize,
-    /// From when the loads are at their targets (the stage's time).
-    ramp: f64,
-    recent: std::collections::VecDeque<f64>,
-    sliding_run: usize,
-}
-
-impl EndWatch {
-    fn new(spec: &DynamicSpec, after_lost: bool) -> EndWatch {
-        EndWatch {
-            rest: spec.until == crate::case::Until::Rest,
-            ratio: spec.rest_ratio,
-            window: spec.rest_window,
-            ramp: if after_lost { 0.0 } else { spec.ramp_time() },
-            recent: Default::default(),
-            sliding_run: 0,
-        }
-    }
-
-    /// The end reached at stage time `tau` with kinetic energy `kinetic` (its peak so far
-    /// `peak`), `sliding` when every contact node slides at f_d.
-    fn observe(&mut self, tau: f64, kinetic: f64, peak: f64, sliding: bool) -> Option<EventEnd> {
-        self.recent.push_back(kinetic);
-        if self.recent.len() > self.window {
-            self.recent.pop_front();
-        }
-        self.sliding_run = if sliding { self.sliding_run + 1 } else { 0 };
-        if !self.rest || tau < self.ramp || self.recent.len() < self.window {
-            return None;
-        }
-        let top = self.recent.iter().cloned().fold(0.0, f64::max);
-        if peak > 0.0 && top <= self.ratio * peak {
-            Some(EventEnd::Rest)
-        } else if self.sliding_run >= self.window {
-            Some(EventEnd::Sliding)
-        } else {
-            None
-        }
-    }
 }
 
 /// Why a time step gave no state: the step itself, or building a halved step's matrix.
@@ -214,16 +175,21 @@ impl Driver<'_> {
         let t_stage = Instant::now();
         let (n_steps, dt) = spec.steps_and_dt();
         let scheme = Scheme::new(spec.rho_inf);
-        let factorise_s = self.integrator_for(scheme, dt)?;
+        let mut sizer = Sizer::new(spec);
+        let factorise_s = self.integrator_for(scheme, dt, sizer.up_max)?;
         let mut now = match self.motion.take() {
             Some(m) => m,
-            None => self.at_rest(),
+            None => {
+                self.last_dt = 0.0;
+                self.at_rest()
+            }
         };
         let mut summary = EventSummary {
             stage: si,
             after_lost_equilibrium: after_lost,
             rho_inf: spec.rho_inf,
             dt,
+            dt_largest: 0.0,
             t_start: now.time,
             t_end: now.time,
             steps: 0,
@@ -233,20 +199,28 @@ impl Driver<'_> {
             factorise_s,
             wall_s: 0.0,
         };
-        let mut watch = EndWatch::new(spec, after_lost);
+        let mut watch = EndWatch::new(spec, dt, after_lost);
         let f_d = self.law.as_ref().and_then(|l| l.f_dynamic().ok());
-        for k in 1..=n_steps {
-            let tau = k as f64 * dt;
+        // The nominal steps of `dt` reached; a step of `2^u` of them starts on a multiple of
+        // `2^u`. Within a step split by halvings, positions count in `dt / 2^MAX_DT_HALVINGS`.
+        let mut k = 0;
+        let fine = 1usize << MAX_DT_HALVINGS;
+        while k < n_steps {
+            let u = sizer.next(k, n_steps);
+            let span = 1usize << u;
+            let tau = (k + span) as f64 * dt;
             self.grow_patches(si, tau);
             let st = self.cstate.clone();
-            let subs = match self.advance(scheme, 0, &now, st.as_ref(), tau - dt, load) {
+            let level = index_of(sizer.up_max, u as isize);
+            let prev = (st.as_ref(), self.last_dt);
+            let subs = match self.advance(level, &now, prev, k as f64 * dt, load) {
                 Ok(s) => s,
                 Err(Failure::Run(e)) => return Err(e),
                 Err(Failure::Step(e)) => {
                     if !self.quiet {
                         eprintln!(
                             "stage {si}: the time step to t = {:.6e} failed even at Δt/{}: {e}; the run stops at t = {:.6e}, its last converged state",
-                            now.time + dt,
+                            now.time + span as f64 * dt,
                             1 << MAX_DT_HALVINGS,
                             now.time
                         );
@@ -258,32 +232,38 @@ impl Driver<'_> {
                     return Ok(EventEnd::Failed);
                 }
             };
-            let n_subs = subs.len();
-            for (i, (time, sub)) in subs.into_iter().enumerate() {
+            let least = subs.iter().map(|s| s.1.doublings).min().unwrap_or(0);
+            let calm = subs.iter().all(|s| s.1.calm);
+            sizer.taken(u, least.max(0) as usize, calm);
+            let mut pos = k * fine;
+            for (time, sub) in subs {
                 now = self.take_sub(time, &sub);
+                summary.steps += 1;
                 summary.newton_iterations += sub.iterations;
                 summary.peak_kinetic = summary.peak_kinetic.max(now.kinetic);
+                summary.dt_largest = summary.dt_largest.max(sub.dt);
                 summary.t_end = now.time;
-                // The end criteria and the nominal index, at the end of a stage's time step.
-                let nominal_end = i + 1 == n_subs;
-                let end = if nominal_end {
-                    summary.steps = k;
+                pos += ((fine as f64) * 2f64.powi(sub.doublings as i32)).round() as usize;
+                // The end criteria and the nominal index, where a step lands on a nominal one.
+                let landed = pos.is_multiple_of(fine).then(|| {
+                    let k1 = pos / fine;
+                    let k0 = std::mem::replace(&mut k, k1);
+                    (k0, k1)
+                });
+                let end = landed.and_then(|(k0, k1)| {
                     let sliding = self.all_sliding(f_d);
                     watch
-                        .observe(tau, now.kinetic, summary.peak_kinetic, sliding)
-                        .or((k == n_steps).then_some(EventEnd::Duration))
-                } else {
-                    None
-                };
-                // The nominal index of a step of the event after a lost equilibrium is its
-                // own count (the stage's nominal loads are the quasi-static ones).
-                let nominal = nominal_end.then(|| {
-                    if after_lost {
-                        k
-                    } else {
-                        self.nominal_before(si) + k
-                    }
+                        .observe((k0, k1), now.kinetic, summary.peak_kinetic, sliding)
+                        .or((k1 == n_steps).then_some(EventEnd::Duration))
                 });
+                // The nominal index of a step of the event after a lost equilibrium counts
+                // from the event's start (the stage's nominal loads are the quasi-static ones).
+                let offset = if after_lost {
+                    0
+                } else {
+                    self.nominal_before(si)
+                };
+                let nominal = landed.map(|(k0, k1)| (offset + k1, k1 - k0));
                 let pseudo = si as f64
                     + alpha0
                     + (1.0 - alpha0) * (now.time - summary.t_start) / (n_steps as f64 * dt);
@@ -291,6 +271,7 @@ impl Driver<'_> {
                 self.record_sub(si, &sub, &now, (pseudo, nominal, last), on_step)?;
                 if let Some(e) = end {
                     summary.end = e;
+                    break;
                 }
             }
             if summary.end != EventEnd::Duration {
@@ -301,9 +282,14 @@ impl Driver<'_> {
         let end = summary.end;
         if !self.quiet {
             eprintln!(
-                "stage {si}: integrated in time to t = {:.6e} in {} steps of {dt:.3e} ({} Newton iterations, peak kinetic energy {:.4e}): {}",
+                "stage {si}: integrated in time to t = {:.6e} in {} steps of {} ({} Newton iterations, peak kinetic energy {:.4e}): {}",
                 summary.t_end,
                 summary.steps,
+                if summary.dt_largest > dt * (1.0 + 1e-9) {
+                    format!("{dt:.3e} to {:.3e}", summary.dt_largest)
+                } else {
+                    format!("{dt:.3e}")
+                },
                 summary.newton_iterations,
                 summary.peak_kinetic,
                 match end {
@@ -329,7 +315,7 @@ impl Driver<'_> {
             _ => vec![0.0; model.dofs.n_free()],
         };
         let pilot = model.dofs.pilot.map(|_| self.pilot);
-        self.integrators[0].at_rest(
+        Integrator::at_rest(
             model,
             self.physical_time,
             self.scale,
@@ -342,6 +328,7 @@ impl Driver<'_> {
     /// Takes the time step `sub` as the driver's state; returns its motion.
     fn take_sub(&mut self, time: TimeState, sub: &Sub) -> TimeState {
         self.physical_time = time.time;
+        self.last_dt = sub.dt;
         self.scale = sub.scale;
         self.control = sub.control;
         if let Some(p) = time.pilot {
@@ -366,7 +353,7 @@ impl Driver<'_> {
         si: usize,
         sub: &Sub,
         now: &TimeState,
-        (pseudo, nominal, last): (f64, Option<usize>, bool),
+        (pseudo, nominal, last): (f64, Option<(usize, usize)>, bool),
         on_step: &mut dyn FnMut(&StepEvent) -> Result<(), RunError>,
     ) -> Result<(), RunError> {
         let model = self.model;
@@ -398,7 +385,7 @@ impl Driver<'_> {
             traction_scale: sub.scale,
             pilot: model.dofs.pilot.is_some().then_some(self.pilot),
             iterations: sub.iterations,
-            cutbacks: sub.halvings,
+            cutbacks: (-sub.doublings).max(0) as usize,
             contact: figures,
             wall_s: sub.wall,
             cycle: self.case.stages[si].cycle,
@@ -411,7 +398,8 @@ impl Driver<'_> {
             time: pseudo,
             scale: sub.scale,
             last,
-            nominal,
+            nominal: nominal.map(|n| n.0),
+            spans: nominal.map_or(1, |n| n.1),
             u: Some(&now.u),
             contact: self.cstate.as_ref(),
             record: self.records.last().expect("pushed above"),
@@ -420,22 +408,23 @@ impl Driver<'_> {
         })
     }
 
-    /// The integrators of time step `dt` and `scheme` (and of its halvings), kept unless the
-    /// ones in hand have both; returns the seconds spent building the first (`K + c M`
-    /// factorised).
-    fn integrator_for(&mut self, scheme: Scheme, dt: f64) -> Result<f64, RunError> {
-        if self
-            .integrators
-            .first()
-            .is_some_and(|i| i.scheme == scheme && i.dt == dt)
-        {
+    /// The integrators of `scheme` for the time step `dt`, its `up_max` doublings and its
+    /// halvings, kept unless the ones in hand are those; builds the one of `dt` and returns
+    /// the seconds it took (`K + c M` factorised).
+    fn integrator_for(&mut self, scheme: Scheme, dt: f64, up_max: usize) -> Result<f64, RunError> {
+        let coarsest = dt * (1u64 << up_max) as f64;
+        let base = index_of(up_max, 0);
+        if self.integrators.as_ref().is_some_and(|l| {
+            l.scheme == scheme && l.coarsest == coarsest && l.sizes.len() == finest(up_max) + 1
+        }) {
             return Ok(0.0);
         }
         let t = Instant::now();
-        self.integrators.clear();
-        let integ = self.build_integrator(scheme, dt)?;
+        let mut ladder = Ladder::new(scheme, coarsest, finest(up_max));
+        let integ = self.build_integrator(scheme, ladder.dt(base))?;
         self.warn_of_coarse_step(&integ);
-        self.integrators.push(integ);
+        ladder.sizes[base] = Some(integ);
+        self.integrators = Some(ladder);
         Ok(t.elapsed().as_secs_f64())
     }
 
@@ -454,24 +443,26 @@ impl Driver<'_> {
             .collect()
     }
 
-    /// One time step of the integrator at `level` (Δt / 2^level) from `now` (contact state
-    /// `st`) at `τ0` from the stage's start; where its contact Newton does not converge, two
-    /// steps of half the size, down to [`MAX_DT_HALVINGS`] halvings (each size's `K + c M`
-    /// factorised once, when first needed). Returns the steps taken.
+    /// One time step of the ladder's integrator at index `level` from `now` (contact state
+    /// `st`) at `τ0` from the stage's start. Where its contact Newton does not converge, or
+    /// the step is larger than the stage's `dt` and changes too many contact nodes' states
+    /// ([`Sizer::refuses`]), two steps of half the size, down to [`MAX_DT_HALVINGS`] halvings
+    /// of `dt`. Returns the steps taken.
     fn advance(
         &mut self,
-        scheme: Scheme,
         level: usize,
         now: &TimeState,
-        st: Option<&State>,
+        (st, prev_dt): (Option<&State>, f64),
         tau0: f64,
         load: LoadAt,
     ) -> Result<Vec<(TimeState, Sub)>, Failure> {
         let t = Instant::now();
-        while self.integrators.len() <= level {
-            let dt = self.integrators[0].dt / (1u64 << self.integrators.len()) as f64;
-            let integ = self.build_integrator(scheme, dt).map_err(Failure::Run)?;
-            self.integrators.push(integ);
+        let ladder = self.integrators.as_ref().expect("built with the stage");
+        let (scheme, h, finest) = (ladder.scheme, ladder.dt(level), ladder.sizes.len() - 1);
+        let doublings = (finest - MAX_DT_HALVINGS) as isize - level as isize;
+        if ladder.sizes[level].is_none() {
+            let integ = self.build_integrator(scheme, h).map_err(Failure::Run)?;
+            self.integrators.as_mut().expect("built").sizes[level] = Some(integ);
         }
         // A node on the friction limit may flip its set at round-off level from one iteration
         // to the next; a time step cannot cut its load back, so it settles there.
@@ -480,46 +471,54 @@ impl Driver<'_> {
             o
         });
         let law = self.law.clone();
-        let integ = &mut self.integrators[level];
-        let h = integ.dt;
+        let ladder = self.integrators.as_mut().expect("built");
+        let integ = ladder.sizes[level].as_mut().expect("built above");
         let (scale, control) = load(tau0 + h);
         let tried = integ.step(now, st, scale, control, law.as_ref(), copt.as_ref());
         let error = match tried {
             Ok(s) if s.time.u.iter().all(|v| v.is_finite()) => {
+                let changes = state_changes(st, s.contact.as_ref());
+                let eta = rate_change((st, prev_dt), (s.contact.as_ref(), h));
+                if !Sizer::refuses(doublings.max(0) as usize, changes, eta) {
+                    integ.lu.end_step();
+                    return Ok(vec![(
+                        s.time,
+                        Sub {
+                            contact: s.contact,
+                            iterations: s.iterations,
+                            scale,
+                            control,
+                            doublings,
+                            calm: changes == 0 && eta <= 0.5 * RATE_CHANGE,
+                            dt: h,
+                            wall: t.elapsed().as_secs_f64(),
+                        },
+                    )]);
+                }
                 integ.lu.end_step();
-                return Ok(vec![(
-                    s.time,
-                    Sub {
-                        contact: s.contact,
-                        iterations: s.iterations,
-                        scale,
-                        control,
-                        halvings: level,
-                        dt: h,
-                        wall: t.elapsed().as_secs_f64(),
-                    },
-                )]);
+                None
             }
-            Ok(_) => StepError::NotFinite,
-            Err(e) => e,
+            Ok(_) => Some(StepError::NotFinite),
+            Err(e) => Some(e),
         };
-        if level >= MAX_DT_HALVINGS {
-            return Err(Failure::Step(error));
+        if let Some(error) = &error {
+            if level >= finest {
+                return Err(Failure::Step(error.clone()));
+            }
+            if !self.quiet {
+                eprintln!(
+                    "the time step to t = {:.6e} (Δt = {h:.3e}): {error}; two steps of Δt/2",
+                    now.time + h
+                );
+            }
         }
-        if !self.quiet {
-            eprintln!(
-                "the time step to t = {:.6e} (Δt = {h:.3e}): {error}; two steps of Δt/2",
-                now.time + h
-            );
-        }
-        let mut first = self.advance(scheme, level + 1, now, st, tau0, load)?;
+        let mut first = self.advance(level + 1, now, (st, prev_dt), tau0, load)?;
         let mid = first.last().expect("at least one step");
-        let (mid_time, mid_contact) = (mid.0.clone(), mid.1.contact.clone());
+        let (mid_time, mid_contact, mid_dt) = (mid.0.clone(), mid.1.contact.clone(), mid.1.dt);
         let second = self.advance(
-            scheme,
             level + 1,
             &mid_time,
-            mid_contact.as_ref(),
+            (mid_contact.as_ref(), mid_dt),
             tau0 + 0.5 * h,
             load,
         )?;

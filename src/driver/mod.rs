@@ -9,6 +9,7 @@
 //! | `stage` | the stepping of a stage: attempts, cutbacks, probes, the records of the steps |
 //! | `outcome` | what the driver hands its caller: each step ([`StepEvent`]), the run ([`Simulation`]) |
 //! | `dynamic` | stages integrated in time, and the event after a lost equilibrium |
+//! | `timestep` | a dynamic stage's step sizes: their integrators, the size control, the end criteria |
 //! | `checkpoint` | what a run keeps between steps to go on exactly ([`Checkpoint`]) |
 //! | `refuse` | loads that no equilibrium can carry, refused before the first step or per step |
 
@@ -17,6 +18,7 @@ mod dynamic;
 mod outcome;
 mod refuse;
 mod stage;
+mod timestep;
 
 pub use crate::record::{EventEnd, EventSummary};
 pub use checkpoint::Checkpoint;

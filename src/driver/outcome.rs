@@ -16,6 +16,9 @@ pub struct StepEvent<'a> {
     /// The case's nominal step (counted over all stages, from 1) this step lands on; `None` for
     /// a sub-step between two nominal loads (after a cutback).
     pub nominal: Option<usize>,
+    /// The nominal steps this step covers, ending at `nominal`: one, or `2^u` for a step of
+    /// `dt · 2^u` of an adaptive dynamic stage.
+    pub spans: usize,
     /// The free solution, where the step computed it (runs without contact).
     pub u: Option<&'a Vec<f64>>,
     /// The contact state (runs with contact; the full field is recovered on demand).

@@ -77,12 +77,14 @@ pub(super) struct Driver<'a> {
     pub(super) last_u: Option<Vec<f64>>,
     pub(super) checkpoint_every: Option<usize>,
     /// The time integrators of the last dynamic stage (`K + c M` factorised for its Δt, then
-    /// for each halving of it that a step needed).
-    pub(super) integrators: Vec<crate::dynamics::Integrator>,
+    /// for each other size a step needed).
+    pub(super) integrators: Option<super::timestep::Ladder>,
     /// The motion a dynamic stage leaves to the next (none after a quasi-static stage).
     pub(super) motion: Option<crate::dynamics::TimeState>,
     /// Physical time reached by the dynamic stages so far.
     pub(super) physical_time: f64,
+    /// The size of the last time step taken (its contact state's slip increments are over it).
+    pub(super) last_dt: f64,
     /// The stage about to begin follows a dynamic stage (it is no hold: see
     /// [`Driver::begin_stage`]).
     pub(super) after_motion: bool,
@@ -208,9 +210,10 @@ impl<'a> Driver<'a> {
             bracket_attempts: 0,
             last_u: None,
             checkpoint_every,
-            integrators: Vec::new(),
+            integrators: None,
             motion: None,
             physical_time: 0.0,
+            last_dt: 0.0,
             after_motion: false,
             events: Vec::new(),
             near_face: std::sync::OnceLock::new(),
@@ -492,6 +495,7 @@ impl Driver<'_> {
             scale: aim.scale,
             last,
             nominal: nominal_index,
+            spans: 1,
             u: if has_u { self.last_u.as_ref() } else { None },
             contact: self.cstate.as_ref(),
             record: self.records.last().expect("pushed above"),

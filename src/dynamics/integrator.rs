@@ -77,7 +77,6 @@ impl Integrator {
     /// model at traction scale `scale` (contact state `st`, pilot state `pilot`): zero velocity
     /// and acceleration.
     pub fn at_rest(
-        &self,
         base: &Model,
         time: f64,
         scale: f64,

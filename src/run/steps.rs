@@ -49,10 +49,15 @@ impl StepSink<'_> {
             m.step(self.model, ev);
         }
         // Written: the nominal steps `output.every` picks and the last one, and with
-        // `output.substeps` the sub-steps of cutbacks between them too.
+        // `output.substeps` the sub-steps of cutbacks between them too. A step that covers
+        // several nominal steps (an adaptive dynamic stage's) is written when it covers one
+        // that is picked.
         let picked = ev.last
             || match ev.nominal {
-                Some(k) => k.is_multiple_of(case.output.every),
+                Some(k) => {
+                    let e = case.output.every;
+                    k / e != k.saturating_sub(ev.spans) / e
+                }
                 None => case.output.substeps,
             };
         self.journal_line(ev, picked)?;
