@@ -17,6 +17,9 @@
 //! * `elements_across_contact`: slave elements across the contact width 2a.
 //! * `s0_resolution`: the contact element size over s0, the transition length of a
 //!   slip-weakening law (resolved when h ≤ s0/2).
+//! * `front_energy`: in runs whose time steps have fronts of weakening, the energy release
+//!   rate reaching a moving front against the fracture energy of its process zone, averaged
+//!   over windows of time steps (a front running on its own has `G = Γ`).
 //! * `hertz_a`: at the end of the first stage, the contact semi-width against the Hertz value
 //!   for the load, E* and the radius fitted to the initial gaps (only where the gap profile is
 //!   a parabola and the contact has not reached a face end).
@@ -124,6 +127,78 @@ pub fn scheme_energy(last: &crate::energy::EnergyRow) -> Check {
         Level::Warning,
         note,
     )
+}
+
+/// Time steps over which a front's `G/Γ` is averaged by [`front_energy`].
+pub const FRONT_WINDOW: usize = 31;
+/// The window mean of `G/Γ` at a moving front below which [`front_energy`] warns.
+pub const FRONT_ENERGY_LIMIT: f64 = 0.8;
+
+/// The energy reaching the fronts of weakening of a run's time steps
+/// ([`crate::record::FrontFigures`]). A front that runs on its own takes in the fracture energy
+/// of its process zone, `G = Γ`, whatever its speed; where the elements along the process zone
+/// or the time steps are too coarse for it, the measured `G` falls below `Γ`. Over every
+/// window of [`FRONT_WINDOW`] consecutive time steps in which a front exists and moves, and
+/// which no growing patch forces (`forced(stage, x)`: a front inside a patch that weakens
+/// nodes at a prescribed speed takes what the patch gives it), the mean of `G/Γ` is held to at
+/// least [`FRONT_ENERGY_LIMIT`]; the value is the smallest such mean. `None` where no window
+/// qualifies (no time step has a front with its `G` and `Γ`).
+pub fn front_energy(records: &[StepRecord], forced: &dyn Fn(usize, f64) -> bool) -> Option<Check> {
+    // (value, side, t0, t1, x0, x1)
+    let mut worst: Option<(f64, usize, f64, f64, f64, f64)> = None;
+    let mut windows = 0usize;
+    for side in 0..2 {
+        let mut run: Vec<(f64, f64, f64)> = Vec::new();
+        let mut close = |run: &mut Vec<(f64, f64, f64)>| {
+            for w in run.windows(FRONT_WINDOW) {
+                let (a, b) = (w[0], w[FRONT_WINDOW - 1]);
+                if a.1 == b.1 {
+                    continue;
+                }
+                windows += 1;
+                let mean = w.iter().map(|r| r.2).sum::<f64>() / FRONT_WINDOW as f64;
+                if worst.is_none_or(|v| mean < v.0) {
+                    worst = Some((mean, side, a.0, b.0, a.1, b.1));
+                }
+            }
+            run.clear();
+        };
+        for r in records {
+            let sample = match (r.physical_time, &r.fronts) {
+                (Some(t), Some(f)) => match (f.front[side], f.g[side], f.gamma[side]) {
+                    (Some(x), Some(g), Some(gam)) if gam > 0.0 && !forced(r.stage, x) => {
+                        Some((t, x, g / gam))
+                    }
+                    _ => None,
+                },
+                _ => None,
+            };
+            match sample {
+                Some(s) => run.push(s),
+                None => close(&mut run),
+            }
+        }
+        close(&mut run);
+    }
+    let (value, side, t0, t1, x0, x1) = worst?;
+    let name = ["left", "right"][side];
+    let speed = (x1 - x0).abs() / (t1 - t0);
+    let note = if value < FRONT_ENERGY_LIMIT {
+        format!(
+            "the energy release rate reaching the {name} front averaged {value:.3} of the fracture energy Γ over t = {t0:.4e}..{t1:.4e} while it ran from x = {x0:.4} to {x1:.4} ({speed:.4e} per unit time): a moving front takes in Γ, so its process zone is not resolved there; a finer mesh along the interface (or a smaller dt) resolves it"
+        )
+    } else {
+        format!(
+            "the energy release rate at the moving fronts averaged at least {value:.3} of the fracture energy Γ over each of {windows} windows of {FRONT_WINDOW} time steps"
+        )
+    };
+    Some(Check::at_least(
+        "front_energy",
+        value,
+        FRONT_ENERGY_LIMIT,
+        Level::Warning,
+        note,
+    ))
 }
 
 /// Relative equilibrium residual above which the answer is rejected.
@@ -508,5 +583,58 @@ mod tests {
         let gain = scheme_energy(&row(-0.01));
         assert_eq!(gain.level, Level::Warning);
         assert!((gain.value - 0.005).abs() < 1e-15, "{}", gain.value);
+    }
+
+    /// A front moving at one node per step with `G/Γ = ratio(x)`: records of stage 0.
+    fn fronts(n: usize, ratio: &dyn Fn(f64) -> f64) -> Vec<StepRecord> {
+        (0..n)
+            .map(|k| {
+                let x = k as f64;
+                StepRecord {
+                    step: k + 1,
+                    stage: 0,
+                    time: 0.0,
+                    traction_scale: 1.0,
+                    pilot: None,
+                    iterations: 1,
+                    cutbacks: 0,
+                    contact: None,
+                    wall_s: 0.0,
+                    cycle: None,
+                    physical_time: Some(1e-6 * (k + 1) as f64),
+                    kinetic: Some(0.0),
+                    fronts: Some(crate::record::FrontFigures {
+                        front: [None, Some(x)],
+                        g: [None, Some(2.0 * ratio(x))],
+                        gamma: [None, Some(2.0)],
+                    }),
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_moving_front_short_of_its_fracture_energy_is_warned_of_unless_a_patch_forces_it() {
+        let free = |_: usize, _: f64| false;
+        let c = front_energy(&fronts(100, &|_| 0.99), &free).expect("windows");
+        assert_eq!(c.level, Level::Ok);
+        assert!((c.value - 0.99).abs() < 1e-12);
+        // G/Γ = 0.5 beyond x = 60: the windows that lie there average 0.5.
+        let low = fronts(100, &|x| if x >= 60.0 { 0.5 } else { 1.0 });
+        let c = front_energy(&low, &free).expect("windows");
+        assert_eq!(c.level, Level::Warning);
+        assert!((c.value - 0.5).abs() < 1e-12, "{}", c.value);
+        assert!(c.note.contains("right front"), "{}", c.note);
+        // A growing patch over x ≥ 50 forces the front there: those steps are not held to Γ.
+        let patch = |_: usize, x: f64| x >= 50.0;
+        let c = front_energy(&low, &patch).expect("windows");
+        assert_eq!(c.level, Level::Ok, "{}", c.note);
+        // A front that does not move, or runs shorter than a window, is not held to Γ.
+        let mut still = fronts(100, &|_| 0.1);
+        for r in &mut still {
+            r.fronts.as_mut().unwrap().front[1] = Some(3.0);
+        }
+        assert!(front_energy(&still, &free).is_none());
+        assert!(front_energy(&fronts(FRONT_WINDOW - 1, &|_| 0.1), &free).is_none());
     }
 }

@@ -189,7 +189,7 @@ fn check_case(name: &str, d: &Done) {
             let f = v["friction"].clone();
             let q_max = num(&f, "q_max");
             // The quasi-static peak against the double Cattaneo–Mindlin solution (measured
-            // −0.008 % on L3).
+            // −0.010 % on L3).
             let apparent = q_max / num(&f, "load");
             let dcm = num(&f, "apparent_friction_dcm");
             assert!(rel(name, "Q_max/P", apparent, dcm) < 0.003);
@@ -205,7 +205,7 @@ fn check_case(name: &str, d: &Done) {
             let event: Vec<&Vec<f64>> = t.rows.iter().filter(|r| r[tc] > 0.0).collect();
             // The event starts at the quasi-static Q_max: the load it holds is within 0.1 %
             // of it (the bracket's width, 1e-5, plus the contact solve's tolerance on the
-            // pilot force; measured 5.4e-7).
+            // pilot force; measured 1.03e-5).
             let held = event
                 .iter()
                 .map(|r| (r[fx] / q_max - 1.0).abs())
@@ -235,7 +235,7 @@ fn check_case(name: &str, d: &Done) {
                 "{name}: the stick zone grows in the event's last 4/5"
             );
             // The energy balance: what the scheme dissipates is a small part of the
-            // friction's dissipation over the event (measured 2e-5).
+            // friction's dissipation over the event (measured 1.7e-5).
             let en = Table::read(&d.out.join("energy.csv"));
             let (dis, numc) = (en.col("dissipation"), en.col("numerical"));
             let first = &en.rows[t.rows.len() - event.len() - 1];
@@ -312,6 +312,15 @@ fn rupture_pmma(name: &str, d: &Done) {
     use common::rupture::{bands, samples, tracks, wave_speeds};
     assert_eq!(d.code, 0, "{name}: {}", d.stderr);
     let v = summary(&d.out);
+    // The fronts above 0.9 c_R, and those running into the graded mesh past |x| = 220 mm,
+    // take in less than Γ: the run's check `front_energy` warns of them.
+    let fe = v["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["name"] == json!("front_energy"))
+        .unwrap_or_else(|| panic!("{name}: no front_energy check"));
+    assert_eq!(fe["level"], json!("warning"), "{name}: {fe}");
     assert_eq!(
         v["events"][0]["end"],
         json!("duration"),

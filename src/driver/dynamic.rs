@@ -179,10 +179,7 @@ impl Driver<'_> {
         let factorise_s = self.integrator_for(scheme, dt, sizer.up_max)?;
         let mut now = match self.motion.take() {
             Some(m) => m,
-            None => {
-                self.last_dt = 0.0;
-                self.at_rest()
-            }
+            None => self.at_rest(),
         };
         let mut summary = EventSummary {
             stage: si,
@@ -212,8 +209,7 @@ impl Driver<'_> {
             self.grow_patches(si, tau);
             let st = self.cstate.clone();
             let level = index_of(sizer.up_max, u as isize);
-            let prev = (st.as_ref(), self.last_dt);
-            let subs = match self.advance(level, &now, prev, k as f64 * dt, load) {
+            let subs = match self.advance(level, &now, st.as_ref(), k as f64 * dt, load) {
                 Ok(s) => s,
                 Err(Failure::Run(e)) => return Err(e),
                 Err(Failure::Step(e)) => {
@@ -328,7 +324,6 @@ impl Driver<'_> {
     /// Takes the time step `sub` as the driver's state; returns its motion.
     fn take_sub(&mut self, time: TimeState, sub: &Sub) -> TimeState {
         self.physical_time = time.time;
-        self.last_dt = sub.dt;
         self.scale = sub.scale;
         self.control = sub.control;
         if let Some(p) = time.pilot {
@@ -452,7 +447,7 @@ impl Driver<'_> {
         &mut self,
         level: usize,
         now: &TimeState,
-        (st, prev_dt): (Option<&State>, f64),
+        st: Option<&State>,
         tau0: f64,
         load: LoadAt,
     ) -> Result<Vec<(TimeState, Sub)>, Failure> {
@@ -478,7 +473,7 @@ impl Driver<'_> {
         let error = match tried {
             Ok(s) if s.time.u.iter().all(|v| v.is_finite()) => {
                 let changes = state_changes(st, s.contact.as_ref());
-                let eta = rate_change((st, prev_dt), (s.contact.as_ref(), h));
+                let eta = rate_change((st, now.dt), (s.contact.as_ref(), h));
                 if !Sizer::refuses(doublings.max(0) as usize, changes, eta) {
                     integ.lu.end_step();
                     return Ok(vec![(
@@ -512,13 +507,13 @@ impl Driver<'_> {
                 );
             }
         }
-        let mut first = self.advance(level + 1, now, (st, prev_dt), tau0, load)?;
+        let mut first = self.advance(level + 1, now, st, tau0, load)?;
         let mid = first.last().expect("at least one step");
-        let (mid_time, mid_contact, mid_dt) = (mid.0.clone(), mid.1.contact.clone(), mid.1.dt);
+        let (mid_time, mid_contact) = (mid.0.clone(), mid.1.contact.clone());
         let second = self.advance(
             level + 1,
             &mid_time,
-            (mid_contact.as_ref(), mid_dt),
+            mid_contact.as_ref(),
             tau0 + 0.5 * h,
             load,
         )?;

@@ -83,8 +83,6 @@ pub(super) struct Driver<'a> {
     pub(super) motion: Option<crate::dynamics::TimeState>,
     /// Physical time reached by the dynamic stages so far.
     pub(super) physical_time: f64,
-    /// The size of the last time step taken (its contact state's slip increments are over it).
-    pub(super) last_dt: f64,
     /// The stage about to begin follows a dynamic stage (it is no hold: see
     /// [`Driver::begin_stage`]).
     pub(super) after_motion: bool,
@@ -213,7 +211,6 @@ impl<'a> Driver<'a> {
             integrators: None,
             motion: None,
             physical_time: 0.0,
-            last_dt: 0.0,
             after_motion: false,
             events: Vec::new(),
             near_face: std::sync::OnceLock::new(),

@@ -14,6 +14,9 @@ use crate::model::step::PilotState;
 #[derive(Clone, Debug)]
 pub struct TimeState {
     pub time: f64,
+    /// The size of the step that reached this state (0 at rest): a contact state's slip
+    /// increments are over it.
+    pub dt: f64,
     pub scale: f64,
     pub u: Vec<f64>,
     pub v: Vec<f64>,
@@ -98,6 +101,7 @@ impl Integrator {
         };
         TimeState {
             time,
+            dt: 0.0,
             scale,
             u,
             v: vec![0.0; n],
@@ -249,6 +253,7 @@ impl Integrator {
         Ok(Stepped {
             time: TimeState {
                 time: now.time + dt,
+                dt,
                 scale,
                 u: u1,
                 v: v1,

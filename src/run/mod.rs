@@ -284,6 +284,16 @@ pub fn run_model(
             summary.checks.push(crate::checks::scheme_energy(&e.last));
         }
     }
+    // Runs whose time steps have fronts of weakening: the energy reaching them.
+    let forced = |stage: usize, x: f64| {
+        case.stages[stage]
+            .weaken
+            .iter()
+            .any(|p| p.speed.is_some() && p.x[0] <= x && x <= p.x[1])
+    };
+    if let Some(c) = crate::checks::front_energy(&summary.steps, &forced) {
+        summary.checks.push(c);
+    }
     summary.output_bytes = crate::report::output_bytes(out_dir, &stem);
     write_file(
         &out_dir.join("summary.json"),
