@@ -22,7 +22,8 @@ use super::checkpoint::StageStart;
 use super::outcome::StepEvent;
 use super::stage::Driver;
 use super::timestep::{
-    EndWatch, Ladder, RATE_CHANGE, Sizer, finest, index_of, rate_change, state_changes,
+    EndWatch, Ladder, MAX_DT_HALVINGS, RATE_CHANGE, Sizer, finest, index_of, rate_change,
+    state_changes,
 };
 use crate::case::{Control, DynamicSpec};
 use crate::contact::solver::{State, Status};
@@ -33,9 +34,6 @@ use std::time::Instant;
 
 /// The load of a dynamic stage at time `tau` from its start: traction scale and pilot drive.
 type LoadAt<'a> = &'a dyn Fn(f64) -> (f64, [Control; 2]);
-
-/// Halvings of a dynamic stage's time step before a step is given up.
-pub const MAX_DT_HALVINGS: usize = 3;
 
 /// A time step taken (beside the motion it reached): its contact state, load, Newton
 /// iterations, its size in doublings of the stage's Δt (negative: halvings), the contact

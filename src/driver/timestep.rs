@@ -23,12 +23,14 @@
 //! user: `dt_max` bounds the step where neither criterion acts (every node stuck, or slip at
 //! a steady rate), so it is what resolves the bodies' own vibrations there.
 
-use super::dynamic::MAX_DT_HALVINGS;
 use crate::case::DynamicSpec;
 use crate::contact::solver::State;
 use crate::dynamics::{Integrator, Scheme};
 use crate::record::EventEnd;
 use std::collections::VecDeque;
+
+/// Halvings of a dynamic stage's time step `dt` before a step is given up.
+pub const MAX_DT_HALVINGS: usize = 3;
 
 /// Steps in a row at a size, none changing a contact node's state and each changing the
 /// slip rate by at most `RATE_CHANGE / 2`, before the size doubles.
