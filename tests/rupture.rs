@@ -222,14 +222,7 @@ fn bad_patches_are_refused_before_anything_is_written() {
     )
     .unwrap();
     let out = dir.join("out");
-    let (code, _, err) = stickslip(&[
-        "sweep",
-        dir.join("case.json").to_str().unwrap(),
-        dir.join("loads.json").to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let (code, _, err) = sweep_in(&dir, "loads.json", &out, &["--quiet"]);
     assert_eq!(code, 2, "{err}");
     assert!(
         err.contains("loads.json: load 0")

@@ -4,7 +4,7 @@
 //! Fig. 6 regime.
 
 mod common;
-use common::{run_case, shipped_case_on, stickslip, tempdir};
+use common::{run_case, shipped_case_on, sweep_in, tempdir};
 use serde_json::{Value, json};
 use std::path::Path;
 
@@ -21,18 +21,7 @@ fn sweep_reports_the_apparent_friction_of_each_law() {
     )
     .unwrap();
     let out = dir.join("out");
-    let sweep = |laws: &str, out: &Path, extra: &[&str]| {
-        let (case, laws) = (dir.join("case.json"), dir.join(laws));
-        let mut args = vec![
-            "sweep",
-            case.to_str().unwrap(),
-            laws.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        stickslip(&args)
-    };
+    let sweep = |laws: &str, out: &Path, extra: &[&str]| sweep_in(&dir, laws, out, extra);
     let (code, _, err) = sweep("sweep.json", &out, &["--quiet"]);
     assert!(code == 0, "{err}");
     let table: Value =
@@ -100,14 +89,7 @@ fn sweep_over_loads_with_the_case_law() {
     )
     .unwrap();
     let out = dir.join("out");
-    let (code, _, err) = stickslip(&[
-        "sweep",
-        dir.join("case.json").to_str().unwrap(),
-        dir.join("loads.json").to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let (code, _, err) = sweep_in(&dir, "loads.json", &out, &["--quiet"]);
     assert_eq!(code, 0, "{err}");
     let table: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
@@ -126,13 +108,7 @@ fn sweep_over_loads_with_the_case_law() {
         );
     }
     std::fs::write(dir.join("empty.json"), "{}").unwrap();
-    let (code, _, err) = stickslip(&[
-        "sweep",
-        dir.join("case.json").to_str().unwrap(),
-        dir.join("empty.json").to_str().unwrap(),
-        "--out",
-        dir.join("o3").to_str().unwrap(),
-    ]);
+    let (code, _, err) = sweep_in(&dir, "empty.json", &dir.join("o3"), &[]);
     assert_eq!(code, 2, "{err}");
     assert!(
         err.contains("empty.json") && err.contains("anything to sweep"),
@@ -168,15 +144,7 @@ fn rows_are_their_single_runs(mesh: &str) {
     ];
     std::fs::write(dir.join("laws.json"), json!({"friction": laws}).to_string()).unwrap();
     let out = dir.join("out");
-    let (code, _, err) = stickslip(&[
-        "sweep",
-        dir.join("case.json").to_str().unwrap(),
-        dir.join("laws.json").to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-        "--no-cache",
-    ]);
+    let (code, _, err) = sweep_in(&dir, "laws.json", &out, &["--quiet", "--no-cache"]);
     assert_eq!(code, 0, "{err}");
     let table: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();

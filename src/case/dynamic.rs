@@ -19,10 +19,11 @@ pub struct DynamicSpec {
     /// `duration / ⌈duration/dt⌉`.
     pub dt: f64,
     /// The largest time step of an adaptive stage (≥ `dt`). The step is `dt` times a power
-    /// of two: it doubles after steps that changed no contact node's state, up to the largest
-    /// `dt · 2^u` ≤ `dt_max`, and a step larger than `dt` that changes any contact node's
-    /// state is taken again as two of half its size, so each change is taken at `dt` (the
-    /// rules: `docs/dynamics.md`). Absent: every step is `dt`.
+    /// of two: it doubles after steps that changed no contact node's state and the slip rate
+    /// little, up to the largest `dt · 2^u` ≤ `dt_max`; a step larger than `dt` that changes
+    /// a contact node's state, or the slip rate by more than 25 %, is taken again as two of
+    /// half its size, so each change of state is taken at `dt` (the rules:
+    /// `docs/dynamics.md`, `driver::timestep`). Absent: every step is `dt`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dt_max: Option<f64>,
     /// Physical duration of the stage (≥ dt).

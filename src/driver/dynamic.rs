@@ -22,8 +22,7 @@ use super::checkpoint::StageStart;
 use super::outcome::StepEvent;
 use super::stage::Driver;
 use super::timestep::{
-    EndWatch, Ladder, MAX_DT_HALVINGS, RATE_CHANGE, Sizer, finest, index_of, rate_change,
-    state_changes,
+    EndWatch, Ladder, MAX_DT_HALVINGS, RATE_CHANGE, Sizer, rate_change, state_changes,
 };
 use crate::case::{Control, DynamicSpec};
 use crate::contact::solver::{State, Status};
@@ -36,8 +35,8 @@ use std::time::Instant;
 type LoadAt<'a> = &'a dyn Fn(f64) -> (f64, [Control; 2]);
 
 /// A time step taken (beside the motion it reached): its contact state, load, Newton
-/// iterations, its size in doublings of the stage's Δt (negative: halvings), the contact
-/// nodes whose state it changed.
+/// iterations, its size in doublings of the stage's Δt (negative: halvings) and whether it
+/// was calm.
 struct Sub {
     contact: Option<State>,
     iterations: usize,
@@ -200,14 +199,20 @@ impl Driver<'_> {
         // `2^u`. Within a step split by halvings, positions count in `dt / 2^MAX_DT_HALVINGS`.
         let mut k = 0;
         let fine = 1usize << MAX_DT_HALVINGS;
+        // The nominal index of a step of the event after a lost equilibrium counts from the
+        // event's start (the stage's nominal loads are the quasi-static ones).
+        let offset = if after_lost {
+            0
+        } else {
+            self.nominal_before(si)
+        };
         while k < n_steps {
             let u = sizer.next(k, n_steps);
             let span = 1usize << u;
             let tau = (k + span) as f64 * dt;
             self.grow_patches(si, tau);
             let st = self.cstate.clone();
-            let level = index_of(sizer.up_max, u as isize);
-            let subs = match self.advance(level, &now, st.as_ref(), k as f64 * dt, load) {
+            let subs = match self.advance(u as isize, &now, st.as_ref(), k as f64 * dt, load) {
                 Ok(s) => s,
                 Err(Failure::Run(e)) => return Err(e),
                 Err(Failure::Step(e)) => {
@@ -237,7 +242,7 @@ impl Driver<'_> {
                 summary.peak_kinetic = summary.peak_kinetic.max(now.kinetic);
                 summary.dt_largest = summary.dt_largest.max(sub.dt);
                 summary.t_end = now.time;
-                pos += ((fine as f64) * 2f64.powi(sub.doublings as i32)).round() as usize;
+                pos += 1 << (MAX_DT_HALVINGS as isize + sub.doublings);
                 // The end criteria and the nominal index, where a step lands on a nominal one.
                 let landed = pos.is_multiple_of(fine).then(|| {
                     let k1 = pos / fine;
@@ -250,13 +255,6 @@ impl Driver<'_> {
                         .observe((k0, k1), now.kinetic, summary.peak_kinetic, sliding)
                         .or((k1 == n_steps).then_some(EventEnd::Duration))
                 });
-                // The nominal index of a step of the event after a lost equilibrium counts
-                // from the event's start (the stage's nominal loads are the quasi-static ones).
-                let offset = if after_lost {
-                    0
-                } else {
-                    self.nominal_before(si)
-                };
                 let nominal = landed.map(|(k0, k1)| (offset + k1, k1 - k0));
                 let pseudo = si as f64
                     + alpha0
@@ -405,18 +403,18 @@ impl Driver<'_> {
     /// halvings, kept unless the ones in hand are those; builds the one of `dt` and returns
     /// the seconds it took (`K + c M` factorised).
     fn integrator_for(&mut self, scheme: Scheme, dt: f64, up_max: usize) -> Result<f64, RunError> {
-        let coarsest = dt * (1u64 << up_max) as f64;
-        let base = index_of(up_max, 0);
-        if self.integrators.as_ref().is_some_and(|l| {
-            l.scheme == scheme && l.coarsest == coarsest && l.sizes.len() == finest(up_max) + 1
-        }) {
+        if self
+            .integrators
+            .as_ref()
+            .is_some_and(|l| l.scheme == scheme && l.dt == dt && l.up_max == up_max)
+        {
             return Ok(0.0);
         }
         let t = Instant::now();
-        let mut ladder = Ladder::new(scheme, coarsest, finest(up_max));
-        let integ = self.build_integrator(scheme, ladder.dt(base))?;
+        let mut ladder = Ladder::new(scheme, dt, up_max);
+        let integ = self.build_integrator(scheme, dt)?;
         self.warn_of_coarse_step(&integ);
-        ladder.sizes[base] = Some(integ);
+        *ladder.size(0) = Some(integ);
         self.integrators = Some(ladder);
         Ok(t.elapsed().as_secs_f64())
     }
@@ -436,26 +434,25 @@ impl Driver<'_> {
             .collect()
     }
 
-    /// One time step of the ladder's integrator at index `level` from `now` (contact state
-    /// `st`) at `τ0` from the stage's start. Where its contact Newton does not converge, or
-    /// the step is larger than the stage's `dt` and changes too many contact nodes' states
-    /// ([`Sizer::refuses`]), two steps of half the size, down to [`MAX_DT_HALVINGS`] halvings
-    /// of `dt`. Returns the steps taken.
+    /// One time step of `dt · 2^u` from `now` (contact state `st`) at `τ0` from the stage's
+    /// start. Where its contact Newton does not converge, or the step is larger than `dt` and
+    /// changes a contact node's state or the slip rate too much ([`Sizer::refuses`]), two
+    /// steps of half the size, down to [`MAX_DT_HALVINGS`] halvings of `dt`. Returns the
+    /// steps taken.
     fn advance(
         &mut self,
-        level: usize,
+        u: isize,
         now: &TimeState,
         st: Option<&State>,
         tau0: f64,
         load: LoadAt,
     ) -> Result<Vec<(TimeState, Sub)>, Failure> {
         let t = Instant::now();
-        let ladder = self.integrators.as_ref().expect("built with the stage");
-        let (scheme, h, finest) = (ladder.scheme, ladder.dt(level), ladder.sizes.len() - 1);
-        let doublings = (finest - MAX_DT_HALVINGS) as isize - level as isize;
-        if ladder.sizes[level].is_none() {
+        let ladder = self.integrators.as_mut().expect("built with the stage");
+        let (scheme, h) = (ladder.scheme, ladder.dt_of(u));
+        if ladder.size(u).is_none() {
             let integ = self.build_integrator(scheme, h).map_err(Failure::Run)?;
-            self.integrators.as_mut().expect("built").sizes[level] = Some(integ);
+            *self.integrators.as_mut().expect("built").size(u) = Some(integ);
         }
         // A node on the friction limit may flip its set at round-off level from one iteration
         // to the next; a time step cannot cut its load back, so it settles there.
@@ -465,14 +462,14 @@ impl Driver<'_> {
         });
         let law = self.law.clone();
         let ladder = self.integrators.as_mut().expect("built");
-        let integ = ladder.sizes[level].as_mut().expect("built above");
+        let integ = ladder.size(u).as_mut().expect("built above");
         let (scale, control) = load(tau0 + h);
         let tried = integ.step(now, st, scale, control, law.as_ref(), copt.as_ref());
         let error = match tried {
             Ok(s) if s.time.u.iter().all(|v| v.is_finite()) => {
                 let changes = state_changes(st, s.contact.as_ref());
                 let eta = rate_change((st, now.dt), (s.contact.as_ref(), h));
-                if !Sizer::refuses(doublings.max(0) as usize, changes, eta) {
+                if !Sizer::refuses(u.max(0) as usize, changes, eta) {
                     integ.lu.end_step();
                     return Ok(vec![(
                         s.time,
@@ -481,7 +478,7 @@ impl Driver<'_> {
                             iterations: s.iterations,
                             scale,
                             control,
-                            doublings,
+                            doublings: u,
                             calm: changes == 0 && eta <= 0.5 * RATE_CHANGE,
                             dt: h,
                             wall: t.elapsed().as_secs_f64(),
@@ -495,7 +492,7 @@ impl Driver<'_> {
             Err(e) => Some(e),
         };
         if let Some(error) = &error {
-            if level >= finest {
+            if u <= -(MAX_DT_HALVINGS as isize) {
                 return Err(Failure::Step(error.clone()));
             }
             if !self.quiet {
@@ -505,16 +502,10 @@ impl Driver<'_> {
                 );
             }
         }
-        let mut first = self.advance(level + 1, now, st, tau0, load)?;
+        let mut first = self.advance(u - 1, now, st, tau0, load)?;
         let mid = first.last().expect("at least one step");
         let (mid_time, mid_contact) = (mid.0.clone(), mid.1.contact.clone());
-        let second = self.advance(
-            level + 1,
-            &mid_time,
-            mid_contact.as_ref(),
-            tau0 + 0.5 * h,
-            load,
-        )?;
+        let second = self.advance(u - 1, &mid_time, mid_contact.as_ref(), tau0 + 0.5 * h, load)?;
         first.extend(second);
         Ok(first)
     }

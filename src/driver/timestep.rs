@@ -75,27 +75,34 @@ pub fn state_changes(before: Option<&State>, after: Option<&State>) -> usize {
     }
 }
 
-/// The integrators of one scheme, one per step size: index `i` steps
-/// `Δt_i = coarsest / 2^i`, built when first needed.
+/// The integrators of one scheme and stage step `dt`, one per step size `dt · 2^u` for
+/// `−MAX_DT_HALVINGS ≤ u ≤ up_max`, each built when first needed.
 pub(super) struct Ladder {
     pub scheme: Scheme,
-    pub coarsest: f64,
-    pub sizes: Vec<Option<Integrator>>,
+    pub dt: f64,
+    pub up_max: usize,
+    sizes: Vec<Option<Integrator>>,
 }
 
 impl Ladder {
-    /// An empty ladder whose sizes are `coarsest / 2^i` for `i` ≤ `finest`.
-    pub fn new(scheme: Scheme, coarsest: f64, finest: usize) -> Ladder {
+    /// An empty ladder.
+    pub fn new(scheme: Scheme, dt: f64, up_max: usize) -> Ladder {
         Ladder {
             scheme,
-            coarsest,
-            sizes: (0..=finest).map(|_| None).collect(),
+            dt,
+            up_max,
+            sizes: (0..=up_max + MAX_DT_HALVINGS).map(|_| None).collect(),
         }
     }
 
-    /// The step size at index `i`.
-    pub fn dt(&self, i: usize) -> f64 {
-        self.coarsest / (1u64 << i) as f64
+    /// The step size `dt · 2^u`.
+    pub fn dt_of(&self, u: isize) -> f64 {
+        self.dt * 2f64.powi(u as i32)
+    }
+
+    /// The integrator of the size `dt · 2^u`, if built.
+    pub fn size(&mut self, u: isize) -> &mut Option<Integrator> {
+        &mut self.sizes[(u + MAX_DT_HALVINGS as isize) as usize]
     }
 }
 
@@ -154,17 +161,6 @@ impl Sizer {
             self.calm = 0;
         }
     }
-}
-
-/// The ladder index of a step of `u` doublings (negative: halvings) of `dt` in a ladder whose
-/// coarsest size is `dt · 2^up_max`.
-pub(super) fn index_of(up_max: usize, u: isize) -> usize {
-    (up_max as isize - u) as usize
-}
-
-/// The finest ladder index of a stage of `up_max` doublings.
-pub(super) fn finest(up_max: usize) -> usize {
-    up_max + MAX_DT_HALVINGS
 }
 
 /// The end criteria of `until: "rest"` ([`DynamicSpec`]), observed at the end of each of a

@@ -72,6 +72,21 @@ pub fn stickslip(args: &[&str]) -> (i32, String, String) {
     stickslip_env(args, &[])
 }
 
+/// `stickslip sweep DIR/case.json DIR/TABLE --out OUT` followed by `extra`; returns what
+/// [`stickslip`] returns.
+pub fn sweep_in(dir: &Path, table: &str, out: &Path, extra: &[&str]) -> (i32, String, String) {
+    let (case, table) = (dir.join("case.json"), dir.join(table));
+    let mut args = vec![
+        "sweep",
+        case.to_str().unwrap(),
+        table.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    stickslip(&args)
+}
+
 /// [`stickslip`] with the environment variables `envs` set for the process.
 pub fn stickslip_env(args: &[&str], envs: &[(&str, &str)]) -> (i32, String, String) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
